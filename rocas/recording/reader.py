@@ -1,0 +1,439 @@
+"""Streaming, damage-tolerant reading of MCAP recordings.
+
+The reader walks the file's data section record by record (constant memory: one chunk at
+a time) using the record parsers of the ``mcap`` library. What it cannot read it reports
+instead of failing, so that a log cut off by a power loss, or one with a corrupted chunk,
+still yields everything before and around the damage:
+
+- a file that ends early is read up to its last complete record (``truncated``);
+- a chunk whose CRC or inner lengths are wrong is skipped (``skipped_chunks``);
+- messages whose channel or schema never appeared, that have an encoding rocas cannot
+  decode, or whose bytes do not parse, are counted per channel (``ChannelStats``).
+
+Decoding needs no generated code: protobuf classes are built from the schema records,
+with one ``mcap_protobuf`` decoder factory per opened file (a shared factory caches
+classes by schema id and would decode a second file with the first file's classes).
+JSON channels are decoded with :func:`json.loads`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import struct
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mcap.data_stream import ReadDataStream
+from mcap.exceptions import McapError
+from mcap.opcode import Opcode
+from mcap.records import Attachment, Channel, Chunk, Message, Metadata, Schema
+from mcap.stream_reader import breakup_chunk
+from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
+
+from rocas.errors import InputError, RecordingError
+
+MAGIC = b"\x89MCAP0\r\n"
+_RECORD_HEADER = struct.Struct("<BQ")
+#: Encodings rocas decodes; any other channel is skipped with a warning.
+DECODABLE_ENCODINGS = ("protobuf", "json")
+
+
+@dataclass(frozen=True)
+class ChannelInfo:
+    """A channel as declared in the recording.
+
+    Attributes:
+        id: channel id in this file.
+        topic: channel topic.
+        message_encoding: e.g. ``"protobuf"``, ``"json"``, ``"ros1"``.
+        schema_name: the schema's name (protobuf: the message's full name); "" if none.
+        schema_encoding: e.g. ``"protobuf"``, ``"jsonschema"``; "" if none.
+        schema_data: the raw schema bytes (protobuf: a serialized FileDescriptorSet).
+        metadata: channel metadata (string key/value pairs).
+        schema_id: the schema record's id in this file (0 when none).
+    """
+
+    id: int
+    topic: str
+    message_encoding: str
+    schema_name: str
+    schema_encoding: str
+    schema_data: bytes
+    metadata: dict[str, str]
+    schema_id: int = 0
+
+
+@dataclass
+class ChannelStats:
+    """What happened to one channel's messages while reading."""
+
+    messages: int = 0
+    decoded: int = 0
+    undecodable: int = 0
+    skipped_encoding: int = 0
+    first_error: str | None = None
+
+
+@dataclass(frozen=True)
+class RawMessage:
+    """One message record with its channel; ``data`` is the encoded payload."""
+
+    channel: ChannelInfo
+    log_time_ns: int
+    publish_time_ns: int
+    sequence: int
+    data: bytes
+
+
+@dataclass(frozen=True)
+class DecodedMessage:
+    """A message decoded to a protobuf object (or JSON value)."""
+
+    channel: ChannelInfo
+    log_time_ns: int
+    publish_time_ns: int
+    sequence: int
+    message: Any
+
+
+@dataclass
+class ReadReport:
+    """Damage and skips found while reading one file (filled in as the file is read)."""
+
+    bytes_total: int = 0
+    bytes_read: int = 0
+    complete: bool = False
+    truncated: bool = False
+    stop_reason: str | None = None
+    skipped_chunks: list[tuple[int, str]] = field(default_factory=list)
+    unknown_channel_messages: int = 0
+    channel_stats: dict[str, ChannelStats] = field(default_factory=dict)
+
+    def warnings(self, name: str) -> list[str]:
+        """Human-readable warning lines (without the ``rocas: warning:`` prefix)."""
+        out: list[str] = []
+        if self.truncated:
+            pct = 100.0 * self.bytes_read / max(self.bytes_total, 1)
+            out.append(
+                f"{name}: recording is truncated ({self.stop_reason}); read "
+                f"{self.bytes_read} of {self.bytes_total} bytes ({pct:.1f}%), "
+                f"stopped at offset {self.bytes_read}"
+            )
+        for offset, reason in self.skipped_chunks:
+            out.append(f"{name}: skipped a corrupted chunk at offset {offset} ({reason})")
+        if self.unknown_channel_messages:
+            out.append(
+                f"{name}: {self.unknown_channel_messages} messages reference channels "
+                "that were never declared (lost with a damaged chunk?)"
+            )
+        for topic, st in sorted(self.channel_stats.items()):
+            if st.skipped_encoding:
+                out.append(
+                    f"{name}: skipped channel {topic}: {st.skipped_encoding} messages in an "
+                    "encoding rocas cannot decode (only protobuf and json are compared)"
+                )
+            if st.undecodable:
+                out.append(
+                    f"{name}: {st.undecodable} of {st.messages} messages on {topic} could "
+                    f"not be decoded ({st.first_error})"
+                )
+        return out
+
+
+def _check_file(path: Path) -> int:
+    if not path.exists():
+        raise InputError(f"no such file: {path}", "check the path")
+    if path.is_dir():
+        raise InputError(f"{path} is a directory, not an MCAP recording")
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            head = f.read(len(MAGIC))
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}") from exc
+    if size == 0:
+        raise RecordingError(f"{path} is empty (0 bytes)", "give a non-empty MCAP recording")
+    if head != MAGIC:
+        raise RecordingError(
+            f"{path} is not an MCAP file (it does not start with the MCAP magic bytes)",
+            "rocas reads MCAP recordings; convert other formats with the mcap CLI",
+        )
+    return size
+
+
+class Recording:
+    """An MCAP file opened for streaming.
+
+    Iterate :meth:`messages` (raw) or :meth:`decoded` once per pass; each pass re-reads the
+    file. Channels, attachments and metadata are collected during a pass; :meth:`scan`
+    runs a pass that collects them without decoding messages.
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = Path(path)
+        self.size = _check_file(self.path)
+        self.channels: dict[int, ChannelInfo] = {}
+        self.report = ReadReport(bytes_total=self.size)
+        self._schemas: dict[int, Schema] = {}
+        self._pending_channels: dict[int, Channel] = {}
+        self._metadata: list[tuple[str, dict[str, str]]] = []
+        self._attachment_names: list[tuple[str, str, int]] = []
+        self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
+        self._protobuf_factory = ProtobufDecoderFactory()
+        self._scanned = False
+
+    # -- records -----------------------------------------------------------------------
+    def _channel_info(self, ch: Channel) -> ChannelInfo:
+        schema = self._schemas.get(ch.schema_id)
+        return ChannelInfo(
+            id=ch.id,
+            topic=ch.topic,
+            message_encoding=ch.message_encoding,
+            schema_name=schema.name if schema else "",
+            schema_encoding=schema.encoding if schema else "",
+            schema_data=bytes(schema.data) if schema else b"",
+            metadata=dict(ch.metadata),
+            schema_id=ch.schema_id,
+        )
+
+    def _register_channel(self, ch: Channel) -> None:
+        if ch.id in self.channels and self.channels[ch.id].topic == ch.topic:
+            return
+        if ch.schema_id != 0 and ch.schema_id not in self._schemas:
+            self._pending_channels[ch.id] = ch  # schema may follow (out of spec, but seen)
+        self.channels[ch.id] = self._channel_info(ch)
+        self.report.channel_stats.setdefault(ch.topic, ChannelStats())
+
+    def _register_schema(self, schema: Schema) -> None:
+        self._schemas[schema.id] = schema
+        for cid, ch in list(self._pending_channels.items()):
+            if ch.schema_id == schema.id:
+                self.channels[cid] = self._channel_info(ch)
+                del self._pending_channels[cid]
+
+    def _records(
+        self, want_attachments: bool = False
+    ) -> Iterator[Message | Attachment]:
+        """Yield message records (and attachments if asked) in file order, tolerating damage.
+
+        A message pass resets :attr:`report`; an attachment pass reports into a scratch one.
+        """
+        if want_attachments:
+            kept, self.report = self.report, ReadReport(bytes_total=self.size)
+            try:
+                yield from self._walk(want_attachments)
+            finally:
+                self.report = kept
+            return
+        yield from self._walk(want_attachments)
+
+    def _walk(self, want_attachments: bool) -> Iterator[Message | Attachment]:
+        with open(self.path, "rb", buffering=1 << 20) as f:
+            f.seek(len(MAGIC))
+            pos = len(MAGIC)
+            while True:
+                head = f.read(_RECORD_HEADER.size)
+                if len(head) < _RECORD_HEADER.size:
+                    self._stop(pos, "the file ends without a footer", truncated=True)
+                    return
+                opcode, length = _RECORD_HEADER.unpack(head)
+                body_start = pos + _RECORD_HEADER.size
+                if length > self.size - body_start:
+                    self._stop(
+                        pos,
+                        f"record at offset {pos} claims {length} bytes but only "
+                        f"{self.size - body_start} remain",
+                        truncated=True,
+                    )
+                    return
+                if opcode in (Opcode.DATA_END, Opcode.FOOTER):
+                    self.report.bytes_read = self.size
+                    self.report.complete = True
+                    self._scanned = not want_attachments
+                    return
+                if opcode in _SKIPPED_OPCODES or (
+                    opcode == Opcode.ATTACHMENT and not want_attachments
+                ):
+                    f.seek(length, io.SEEK_CUR)
+                    pos = body_start + length
+                    self.report.bytes_read = pos
+                    continue
+                body = f.read(length)
+                pos = body_start + length
+                try:
+                    yield from self._handle_record(opcode, body, body_start - _RECORD_HEADER.size)
+                except _BadRecord as exc:
+                    self._stop(exc.offset, exc.reason, truncated=True)
+                    return
+                self.report.bytes_read = pos
+
+    def _stop(self, offset: int, reason: str, truncated: bool) -> None:
+        self.report.bytes_read = offset
+        self.report.truncated = truncated
+        self.report.stop_reason = reason
+        self._scanned = True
+
+    def _handle_record(self, opcode: int, body: bytes, offset: int) -> Iterator[Any]:
+        stream = ReadDataStream(io.BytesIO(body))
+        if opcode == Opcode.CHUNK:
+            try:
+                chunk = Chunk.read(stream)
+                records = breakup_chunk(chunk, validate_crc=True)
+            except Exception as exc:  # any parse failure inside one chunk: skip the chunk
+                self.report.skipped_chunks.append((offset, _describe(exc)))
+                return
+            for rec in records:
+                if isinstance(rec, Schema):
+                    self._register_schema(rec)
+                elif isinstance(rec, Channel):
+                    self._register_channel(rec)
+                elif isinstance(rec, Message):
+                    yield rec
+            return
+        try:
+            if opcode == Opcode.MESSAGE:
+                yield Message.read(stream, len(body))
+            elif opcode == Opcode.SCHEMA:
+                self._register_schema(Schema.read(stream))
+            elif opcode == Opcode.CHANNEL:
+                self._register_channel(Channel.read(stream))
+            elif opcode == Opcode.METADATA:
+                md = Metadata.read(stream)
+                self._metadata.append((md.name, dict(md.metadata)))
+            elif opcode == Opcode.ATTACHMENT:
+                yield Attachment.read(stream)
+            # other opcodes (header, indexes, unknown) carry nothing we need
+        except (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError) as exc:
+            raise _BadRecord(offset, f"unreadable record at offset {offset}: {_describe(exc)}")
+
+    # -- public passes ------------------------------------------------------------------
+    def messages(self) -> Iterator[RawMessage]:
+        """Every readable message, in file order (each call is a new pass)."""
+        self.report = ReadReport(bytes_total=self.size)
+        stats = self.report.channel_stats
+        for rec in self._records():
+            assert isinstance(rec, Message)
+            ch = self.channels.get(rec.channel_id)
+            if ch is None:
+                self.report.unknown_channel_messages += 1
+                continue
+            st = stats.get(ch.topic)
+            if st is None:
+                st = stats[ch.topic] = ChannelStats()
+            st.messages += 1
+            yield RawMessage(ch, rec.log_time, rec.publish_time, rec.sequence, rec.data)
+
+    def decoded(self, topics: set[str] | None = None) -> Iterator[DecodedMessage]:
+        """Every message that decodes, in file order; failures are counted, not raised."""
+        for raw in self.messages():
+            ch = raw.channel
+            if topics is not None and ch.topic not in topics:
+                continue
+            st = self.report.channel_stats[ch.topic]
+            decode = self._decoder(ch)
+            if decode is None:
+                st.skipped_encoding += 1
+                continue
+            try:
+                obj = decode(raw.data)
+            except Exception as exc:  # a foreign file can hold anything
+                st.undecodable += 1
+                if st.first_error is None:
+                    st.first_error = _describe(exc)
+                continue
+            st.decoded += 1
+            yield DecodedMessage(ch, raw.log_time_ns, raw.publish_time_ns, raw.sequence, obj)
+
+    def scan(self) -> Recording:
+        """Read the file once to learn its channels, metadata and damage; returns self."""
+        if not self._scanned:
+            for _ in self.messages():
+                pass
+        return self
+
+    def attachments(self) -> Iterator[Attachment]:
+        """Every readable attachment record (a separate pass over the file)."""
+        for rec in self._records(want_attachments=True):
+            if isinstance(rec, Attachment):
+                yield rec
+
+    def attachment(self, name: str) -> bytes | None:
+        """The data of the first attachment called ``name``, or None."""
+        for att in self.attachments():
+            if att.name == name:
+                return bytes(att.data)
+        return None
+
+    @property
+    def metadata(self) -> list[tuple[str, dict[str, str]]]:
+        """Metadata records seen so far (complete after a full pass)."""
+        return list(self._metadata)
+
+    def topics(self) -> dict[str, ChannelInfo]:
+        """Channels by topic (after a pass; the last declaration of a topic wins)."""
+        return {ch.topic: ch for ch in self.channels.values()}
+
+    # -- decoding -----------------------------------------------------------------------
+    def _decoder(self, ch: ChannelInfo) -> Callable[[bytes], Any] | None:
+        if ch.id in self._decoders:
+            return self._decoders[ch.id]
+        decoder: Callable[[bytes], Any] | None
+        if ch.message_encoding == "protobuf":
+            schema = self._schemas.get(ch.schema_id)
+            if schema is None:
+                decoder = _failing(f"channel {ch.topic} has no protobuf schema")
+            else:
+                try:
+                    decoder = self._protobuf_factory.decoder_for("protobuf", schema)
+                except Exception as exc:
+                    decoder = _failing(f"bad protobuf schema {schema.name}: {_describe(exc)}")
+                if decoder is None:
+                    decoder = _failing(f"schema encoding {schema.encoding!r} is not protobuf")
+        elif ch.message_encoding == "json":
+            decoder = json.loads
+        else:
+            decoder = None
+        self._decoders[ch.id] = decoder
+        return decoder
+
+
+
+_SKIPPED_OPCODES = frozenset(
+    {
+        Opcode.HEADER,
+        Opcode.MESSAGE_INDEX,
+        Opcode.CHUNK_INDEX,
+        Opcode.ATTACHMENT_INDEX,
+        Opcode.METADATA_INDEX,
+        Opcode.STATISTICS,
+        Opcode.SUMMARY_OFFSET,
+    }
+)
+
+
+class _BadRecord(Exception):
+    def __init__(self, offset: int, reason: str) -> None:
+        super().__init__(reason)
+        self.offset = offset
+        self.reason = reason
+
+
+def _describe(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _failing(reason: str) -> Callable[[bytes], Any]:
+    def decode(_: bytes) -> Any:
+        raise RecordingError(reason)
+
+    return decode
+
+
+def open_recording(path: str | os.PathLike[str]) -> Recording:
+    """Open an MCAP file for streaming; raises :class:`InputError` if it is not one."""
+    return Recording(path)
