@@ -1,0 +1,3 @@
+from rocas.cli.main import console_script
+
+console_script()

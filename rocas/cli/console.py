@@ -1,0 +1,38 @@
+"""Console helpers: where output goes, and the one format for errors and warnings."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from rich.console import Console
+
+
+@dataclass
+class Env:
+    """The streams a command writes to; tests inject StringIO objects.
+
+    Attributes:
+        stdout: results (tables, JSON).
+        stderr: progress, warnings and errors.
+    """
+
+    stdout: TextIO = field(default_factory=lambda: sys.stdout)
+    stderr: TextIO = field(default_factory=lambda: sys.stderr)
+
+    def out(self) -> Console:
+        """A rich console on stdout (plain text when stdout is not a terminal)."""
+        return Console(file=self.stdout, soft_wrap=True, highlight=False)
+
+    def err(self) -> Console:
+        """A rich console on stderr (for progress bars)."""
+        return Console(file=self.stderr, soft_wrap=True, highlight=False)
+
+    def warn(self, message: str) -> None:
+        """One ``rocas: warning: ...`` line on stderr."""
+        print(f"rocas: warning: {message}", file=self.stderr, flush=True)
+
+    def error(self, message: str) -> None:
+        """One ``rocas: error: ...`` line on stderr."""
+        print(f"rocas: error: {message}", file=self.stderr, flush=True)

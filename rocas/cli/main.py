@@ -1,0 +1,114 @@
+"""The ``rocas`` command: parse arguments, dispatch to one module per command, map errors.
+
+Each command lives in ``rocas/cli/<name>.py`` and exposes::
+
+    HELP: str                                  # one line for ``rocas --help``
+    def add_arguments(parser) -> None          # its options
+    def run(args, env: Env) -> int             # does the work, returns an exit status
+
+Only this module turns exceptions into ``rocas: error: ...`` lines and exit codes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import traceback
+from collections.abc import Sequence
+from typing import NoReturn
+
+from rocas import __version__
+from rocas.cli.console import Env
+from rocas.cli.exit_codes import ExitStatus, exit_status_for
+from rocas.errors import RocasError
+
+#: Command name -> module under rocas.cli. Modules that are not present are not offered.
+COMMANDS: dict[str, str] = {
+    "analyze": "analyze",
+    "diff": "diff",
+    "cmg": "cmg",
+    "simulate": "simulate",
+    "replay": "replay",
+    "params": "params",
+    "annotate": "annotate",
+    "view": "view",
+    "catalog": "catalog",
+    "bench": "bench",
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors in rocas's one-line format (exit 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(
+            ExitStatus.USAGE,
+            f"rocas: error: {message} (see '{self.prog} --help')\n",
+        )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="rocas",
+        description="Root cause analysis of autonomous-driving accidents from MCAP recordings.",
+    )
+    parser.add_argument("--version", action="version", version=f"rocas {__version__}")
+    parser.add_argument(
+        "--traceback", action="store_true", help="show the full traceback on errors"
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for name, module_name in COMMANDS.items():
+        try:
+            module = importlib.import_module(f"rocas.cli.{module_name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"rocas.cli.{module_name}":
+                continue
+            raise
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        p.add_argument("--traceback", action="store_true", default=argparse.SUPPRESS,
+                       help="show the full traceback on errors")
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
+    """Entry point of the console script; returns (and, as a script, exits with) a status."""
+    env = env or Env()
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help(env.stderr)
+        return ExitStatus.USAGE
+    try:
+        return int(args._run(args, env))
+    except KeyboardInterrupt as exc:
+        if args.traceback:
+            traceback.print_exc(file=env.stderr)
+        kept = getattr(exc, "kept", None) or "no output was written"
+        env.error(f"interrupted ({kept})")
+        return ExitStatus.INTERRUPTED
+    except RocasError as exc:
+        if args.traceback:
+            traceback.print_exc(file=env.stderr)
+        env.error(str(exc))
+        return exit_status_for(exc)
+    except BrokenPipeError:
+        return ExitStatus.SUCCESS
+    except Exception as exc:  # a bug: say so in one line, full story with --traceback
+        if args.traceback:
+            traceback.print_exc(file=env.stderr)
+        env.error(
+            f"internal error: {type(exc).__name__}: {exc} "
+            "(this is a bug in rocas; rerun with --traceback and report it)"
+        )
+        return ExitStatus.INTERNAL
+
+
+def console_script() -> NoReturn:
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    console_script()
