@@ -19,7 +19,6 @@ JSON channels are decoded with :func:`json.loads`.
 from __future__ import annotations
 
 import io
-import json
 import os
 import struct
 from collections.abc import Callable, Iterator
@@ -30,11 +29,12 @@ from typing import Any
 from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
 from mcap.opcode import Opcode
+from mcap.reader import make_reader
 from mcap.records import Attachment, Channel, Chunk, Message, Metadata, Schema
 from mcap.stream_reader import breakup_chunk
-from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
 
 from rocas.errors import InputError, RecordingError
+from rocas.recording.decoding import DecoderCache
 
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD_HEADER = struct.Struct("<BQ")
@@ -173,7 +173,9 @@ class Recording:
     runs a pass that collects them without decoding messages.
     """
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
+    def __init__(
+        self, path: str | os.PathLike[str], decoders: DecoderCache | None = None
+    ) -> None:
         self.path = Path(path)
         self.size = _check_file(self.path)
         self.channels: dict[int, ChannelInfo] = {}
@@ -183,7 +185,7 @@ class Recording:
         self._metadata: list[tuple[str, dict[str, str]]] = []
         self._attachment_names: list[tuple[str, str, int]] = []
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
-        self._protobuf_factory = ProtobufDecoderFactory()
+        self._decoder_cache = decoders if decoders is not None else DecoderCache()
         self._scanned = False
 
     # -- records -----------------------------------------------------------------------
@@ -308,7 +310,8 @@ class Recording:
                 yield Attachment.read(stream)
             # other opcodes (header, indexes, unknown) carry nothing we need
         except (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError) as exc:
-            raise _BadRecord(offset, f"unreadable record at offset {offset}: {_describe(exc)}")
+            reason = f"unreadable record at offset {offset}: {_describe(exc)}"
+            raise _BadRecord(offset, reason) from exc
 
     # -- public passes ------------------------------------------------------------------
     def messages(self) -> Iterator[RawMessage]:
@@ -355,6 +358,21 @@ class Recording:
                 pass
         return self
 
+    def summary_start_time_ns(self) -> int | None:
+        """Earliest message log time from the file's summary statistics, if it has them.
+
+        A truncated file has no summary; callers then fall back to the first message read.
+        """
+        try:
+            with open(self.path, "rb") as f:
+                summary = make_reader(f).get_summary()
+        except Exception:  # no or damaged summary: not an error for a streaming reader
+            return None
+        stats = summary.statistics if summary is not None else None
+        if stats is None or stats.message_count == 0:
+            return None
+        return int(stats.message_start_time)
+
     def attachments(self) -> Iterator[Attachment]:
         """Every readable attachment record (a separate pass over the file)."""
         for rec in self._records(want_attachments=True):
@@ -381,22 +399,9 @@ class Recording:
     def _decoder(self, ch: ChannelInfo) -> Callable[[bytes], Any] | None:
         if ch.id in self._decoders:
             return self._decoders[ch.id]
-        decoder: Callable[[bytes], Any] | None
-        if ch.message_encoding == "protobuf":
-            schema = self._schemas.get(ch.schema_id)
-            if schema is None:
-                decoder = _failing(f"channel {ch.topic} has no protobuf schema")
-            else:
-                try:
-                    decoder = self._protobuf_factory.decoder_for("protobuf", schema)
-                except Exception as exc:
-                    decoder = _failing(f"bad protobuf schema {schema.name}: {_describe(exc)}")
-                if decoder is None:
-                    decoder = _failing(f"schema encoding {schema.encoding!r} is not protobuf")
-        elif ch.message_encoding == "json":
-            decoder = json.loads
-        else:
-            decoder = None
+        decoder = self._decoder_cache.decoder(
+            ch.message_encoding, ch.schema_name, ch.schema_encoding, ch.schema_data
+        )
         self._decoders[ch.id] = decoder
         return decoder
 
@@ -427,13 +432,13 @@ def _describe(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _failing(reason: str) -> Callable[[bytes], Any]:
-    def decode(_: bytes) -> Any:
-        raise RecordingError(reason)
 
-    return decode
+def open_recording(
+    path: str | os.PathLike[str], decoders: DecoderCache | None = None
+) -> Recording:
+    """Open an MCAP file for streaming; raises :class:`InputError` if it is not one.
 
-
-def open_recording(path: str | os.PathLike[str]) -> Recording:
-    """Open an MCAP file for streaming; raises :class:`InputError` if it is not one."""
-    return Recording(path)
+    Pass one :class:`DecoderCache` to several recordings to decode identical schemas
+    into identical classes.
+    """
+    return Recording(path, decoders)

@@ -1,0 +1,89 @@
+"""Change points of an MDR series with PELT (exact, l2 cost).
+
+``ruptures.KernelCPD(kernel="linear")`` runs exact PELT for the l2 (change in mean) cost
+in C; it finds the same change points as ``ruptures.Pelt(model="l2")``, about 1000x faster.
+
+The penalty follows the paper's argument that the first seconds of two compared runs are
+alike, so their MDR is the channel's baseline noise:
+
+    penalty = penalty_scale * max(var(baseline), noise_floor**2) * ln(n)
+
+where ``baseline`` is the part of the series in its first ``baseline_s`` seconds and ``n``
+the series length (a BIC-like penalty scaled by the channel's own noise). The floor keeps a
+noiseless baseline (identical runs) from making every wiggle a change point. An explicit
+``penalty`` replaces the formula.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import ruptures
+
+
+@dataclass(frozen=True)
+class ChangePointConfig:
+    """How change points are detected.
+
+    Attributes:
+        baseline_s: length of the baseline window at the start of the series [s].
+        penalty_scale: multiplier of the noise-derived penalty (dimensionless).
+        noise_floor: smallest baseline standard deviation assumed [MDR units].
+        penalty: fixed penalty; None derives it from the baseline.
+        min_size: fewest bins in a segment.
+    """
+
+    baseline_s: float = 3.0
+    penalty_scale: float = 3.0
+    noise_floor: float = 0.02
+    penalty: float | None = None
+    min_size: int = 2
+
+
+@dataclass(frozen=True)
+class ChangePoints:
+    """Change points of one series.
+
+    Attributes:
+        times_s: change point times, ascending [s]: the start of each new segment.
+        indices: (k,) index into the series of each new segment's first bin.
+        penalty: the penalty used.
+        baseline_std: the baseline's standard deviation [MDR units].
+    """
+
+    times_s: tuple[float, ...]
+    indices: tuple[int, ...]
+    penalty: float
+    baseline_std: float
+
+    @property
+    def first_s(self) -> float | None:
+        """t* of the channel: its first change point, or None if it never deviated."""
+        return self.times_s[0] if self.times_s else None
+
+
+def penalty_for(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> tuple[
+    float, float
+]:
+    """(penalty, baseline std) for a series, per the module docstring."""
+    base = values[times_s < times_s[0] + cfg.baseline_s] if len(values) else values
+    std = float(np.std(base)) if len(base) > 1 else 0.0
+    if cfg.penalty is not None:
+        return float(cfg.penalty), std
+    var = max(std, cfg.noise_floor) ** 2
+    return cfg.penalty_scale * var * math.log(max(len(values), 2)), std
+
+
+def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> ChangePoints:
+    """Detect the change points of ``values`` (shape (n,)) sampled at ``times_s`` (shape (n,))."""
+    values = np.asarray(values, dtype=np.float64)
+    times_s = np.asarray(times_s, dtype=np.float64)
+    penalty, std = penalty_for(values, times_s, cfg)
+    if len(values) < 2 * cfg.min_size or np.all(values == values[0]):
+        return ChangePoints((), (), penalty, std)
+    algo = ruptures.KernelCPD(kernel="linear", min_size=cfg.min_size, jump=1)
+    ends = algo.fit(values.reshape(-1, 1)).predict(pen=penalty)
+    idx = tuple(int(e) for e in ends[:-1])  # the last end is len(values)
+    return ChangePoints(tuple(float(times_s[i]) for i in idx), idx, penalty, std)

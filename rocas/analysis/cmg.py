@@ -1,0 +1,293 @@
+"""The Channel Module Graph (CMG, Definition 5.1): who writes and who reads each channel.
+
+A CMG is a directed bipartite graph with an edge module -> channel for every writer and
+channel -> module for every reader. rocas learns it from the recording itself, in this order
+of precedence per channel:
+
+1. a ``--cmg`` JSON file, for the channels it names (``source = "cmg"``);
+2. the channel metadata ``rocas.writers`` / ``rocas.readers`` (``source = "metadata"``);
+3. the ROS 1 profile's ``callerid`` metadata, which names the publishing node, as the writer
+   when ``rocas.writers`` is absent (``source = "callerid"``).
+
+The CMG JSON format::
+
+    {"modules": {"planning": {"reads": ["/prediction"], "writes": ["/planning"]}},
+     "control_channel": "/control"}            # optional
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+
+from rocas.errors import InputError, TopologyError
+from rocas.recording.reader import ChannelInfo
+from rocas.recording.topology import (
+    CONTROL_ROLE,
+    READERS_KEY,
+    ROLE_KEY,
+    ROS1_CALLERID_KEY,
+    WRITERS_KEY,
+    split_modules,
+)
+
+CHANNEL, MODULE = "channel", "module"
+Node = tuple[str, str]  # (kind, name)
+
+
+@dataclass(frozen=True)
+class ChannelTopology:
+    """Topology of one channel.
+
+    Attributes:
+        topic: the channel.
+        writers: modules publishing on it.
+        readers: modules subscribed to it.
+        is_control: whether the channel is marked ``rocas.role = control``.
+        writers_source: where the writers came from: "cmg", "metadata", "callerid" or "missing".
+        readers_source: where the readers came from: "cmg", "metadata" or "missing".
+    """
+
+    topic: str
+    writers: tuple[str, ...]
+    readers: tuple[str, ...]
+    is_control: bool = False
+    writers_source: str = "missing"
+    readers_source: str = "missing"
+
+
+@dataclass(frozen=True)
+class CmgSpec:
+    """A topology supplied from a CMG JSON file.
+
+    Attributes:
+        writes: module -> channels it writes.
+        reads: module -> channels it reads.
+        control_channel: the control channel, if the file names one.
+        path: the file it came from (for messages).
+    """
+
+    writes: Mapping[str, tuple[str, ...]]
+    reads: Mapping[str, tuple[str, ...]]
+    control_channel: str | None = None
+    path: str = "<cmg>"
+
+    def channels(self) -> set[str]:
+        """Every channel the file mentions."""
+        out: set[str] = set()
+        for chans in (*self.writes.values(), *self.reads.values()):
+            out.update(chans)
+        return out
+
+
+def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
+    """Read and validate a CMG JSON file."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"no such CMG file: {p}", "check the --cmg path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read CMG file {p}: {exc}") from exc
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(
+            f"{p}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})",
+            'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}',
+        ) from None
+    return parse_cmg(data, str(p))
+
+
+def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:
+    """Validate a decoded CMG JSON document."""
+    hint = 'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}'
+    if not isinstance(data, dict) or not isinstance(data.get("modules"), dict):
+        raise InputError(f"{origin}: key 'modules' must be an object of modules", hint)
+    unknown = set(data) - {"modules", "control_channel"}
+    if unknown:
+        raise InputError(f"{origin}: unknown key {sorted(unknown)[0]!r}", hint)
+    writes: dict[str, tuple[str, ...]] = {}
+    reads: dict[str, tuple[str, ...]] = {}
+    for name, spec in data["modules"].items():
+        if not isinstance(spec, dict):
+            raise InputError(f"{origin}: modules.{name} must be an object", hint)
+        bad = set(spec) - {"reads", "writes"}
+        if bad:
+            raise InputError(f"{origin}: modules.{name}: unknown key {sorted(bad)[0]!r}", hint)
+        for key, target in (("reads", reads), ("writes", writes)):
+            chans = spec.get(key, [])
+            if not isinstance(chans, list) or not all(isinstance(c, str) and c for c in chans):
+                raise InputError(
+                    f"{origin}: modules.{name}.{key} must be a list of channel names", hint
+                )
+            target[name] = tuple(dict.fromkeys(chans))
+    control = data.get("control_channel")
+    if control is not None and not isinstance(control, str):
+        raise InputError(f"{origin}: control_channel must be a string")
+    return CmgSpec(writes, reads, control, origin)
+
+
+def resolve_topology(
+    channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None
+) -> dict[str, ChannelTopology]:
+    """Per-topic topology from channel metadata, ``callerid`` and an optional CMG file."""
+    metas: dict[str, dict[str, str]] = {}
+    for ch in channels:
+        merged = metas.setdefault(ch.topic, {})
+        for k, v in ch.metadata.items():
+            merged.setdefault(k, v)
+    topics = set(metas)
+    cmg_channels = cmg.channels() if cmg else set()
+    topics |= cmg_channels
+    out: dict[str, ChannelTopology] = {}
+    for topic in sorted(topics):
+        meta = metas.get(topic, {})
+        is_control = meta.get(ROLE_KEY, "").strip().lower() == CONTROL_ROLE
+        if cmg is not None and topic in cmg_channels:
+            writers = tuple(m for m, cs in cmg.writes.items() if topic in cs)
+            readers = tuple(m for m, cs in cmg.reads.items() if topic in cs)
+            out[topic] = ChannelTopology(
+                topic, writers, readers, is_control,
+                "cmg" if writers else "missing", "cmg" if readers else "missing",
+            )
+            continue
+        writers = split_modules(meta.get(WRITERS_KEY))
+        w_src = "metadata" if writers else "missing"
+        if not writers and meta.get(ROS1_CALLERID_KEY, "").strip():
+            writers = (meta[ROS1_CALLERID_KEY].strip(),)
+            w_src = "callerid"
+        readers = split_modules(meta.get(READERS_KEY))
+        out[topic] = ChannelTopology(
+            topic, writers, readers, is_control, w_src, "metadata" if readers else "missing"
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class ChannelModuleGraph:
+    """A CMG: channels, modules, and the read/write edges between them.
+
+    Attributes:
+        topology: topic -> ChannelTopology.
+        graph: networkx DiGraph over nodes ``("channel", topic)`` and ``("module", name)``.
+    """
+
+    topology: dict[str, ChannelTopology]
+    graph: nx.DiGraph = field(compare=False)
+
+    @classmethod
+    def from_topology(cls, topology: Mapping[str, ChannelTopology]) -> ChannelModuleGraph:
+        g = nx.DiGraph()
+        for topic, t in topology.items():
+            g.add_node((CHANNEL, topic))
+            for m in t.writers:
+                g.add_edge((MODULE, m), (CHANNEL, topic))
+            for m in t.readers:
+                g.add_edge((CHANNEL, topic), (MODULE, m))
+        return cls(dict(topology), g)
+
+    @property
+    def modules(self) -> list[str]:
+        return sorted(n for k, n in self.graph.nodes if k == MODULE)
+
+    @property
+    def channels(self) -> list[str]:
+        return sorted(self.topology)
+
+    def has_edges(self) -> bool:
+        return self.graph.number_of_edges() > 0
+
+    def writers_of(self, topic: str) -> tuple[str, ...]:
+        t = self.topology.get(topic)
+        return t.writers if t else ()
+
+    def channels_written_by(self, module: str) -> list[str]:
+        return sorted(n for _, (k, n) in self.graph.out_edges((MODULE, module)) if k == CHANNEL)
+
+    def to_json(self) -> dict[str, Any]:
+        """The graph in the ``--cmg`` file format, plus per-channel sources."""
+        modules: dict[str, dict[str, list[str]]] = {}
+        for m in self.modules:
+            modules[m] = {
+                "reads": sorted(n for (k, n), _ in self.graph.in_edges((MODULE, m))),
+                "writes": self.channels_written_by(m),
+            }
+        control = [t for t, c in self.topology.items() if c.is_control]
+        return {
+            "modules": modules,
+            "control_channel": control[0] if len(control) == 1 else None,
+            "channels": [
+                {
+                    "topic": t.topic,
+                    "writers": list(t.writers),
+                    "readers": list(t.readers),
+                    "writers_source": t.writers_source,
+                    "readers_source": t.readers_source,
+                    "control": t.is_control,
+                }
+                for t in self.topology.values()
+            ],
+        }
+
+    def to_dot(self) -> str:
+        """Graphviz DOT text: modules as ellipses, channels as boxes."""
+        lines = ["digraph cmg {", "  rankdir=LR;"]
+        for kind, name in sorted(self.graph.nodes):
+            shape = "box" if kind == CHANNEL else "ellipse"
+            extra = ", style=bold" if kind == CHANNEL and self.topology[name].is_control else ""
+            lines.append(f'  "{kind}:{name}" [label="{name}", shape={shape}{extra}];')
+        for (k1, n1), (k2, n2) in sorted(self.graph.edges):
+            lines.append(f'  "{k1}:{n1}" -> "{k2}:{n2}";')
+        lines.append("}")
+        return "\n".join(lines) + "\n"
+
+
+def build_cmg(channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None) -> ChannelModuleGraph:
+    """Build the CMG of a recording; refuses a recording that has no topology at all."""
+    topo = resolve_topology(channels, cmg)
+    graph = ChannelModuleGraph.from_topology(topo)
+    if not graph.has_edges():
+        raise TopologyError(
+            "the recording declares no channel topology (no channel has rocas.writers, "
+            "rocas.readers or callerid metadata)",
+            "pass --cmg FILE with the module graph, or add the metadata with "
+            "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'",
+        )
+    return graph
+
+
+def control_channel(
+    graph: ChannelModuleGraph, override: str | None = None, cmg: CmgSpec | None = None
+) -> str:
+    """The channel Algorithm 1 starts from: ``override``, else the CMG file's, else the one
+    channel marked ``rocas.role = control``."""
+    for chosen, origin in ((override, "--control-channel"), (cmg and cmg.control_channel, "cmg")):
+        if chosen:
+            if chosen not in graph.topology:
+                raise TopologyError(
+                    f"control channel {chosen!r} (from {origin}) is not in the recording",
+                    f"choose one of: {', '.join(graph.channels)}",
+                )
+            return chosen
+    marked = sorted(t for t, c in graph.topology.items() if c.is_control)
+    if len(marked) == 1:
+        return marked[0]
+    if len(marked) > 1:
+        raise TopologyError(
+            f"several channels are marked rocas.role=control: {', '.join(marked)}",
+            "pick one with --control-channel TOPIC",
+        )
+    written = [t for t, c in graph.topology.items() if c.writers]
+    candidates = sorted(written, key=lambda t: ("control" not in t.lower(), t))
+    raise TopologyError(
+        "no channel is marked as the control channel (channel metadata rocas.role=control)",
+        "pick one with --control-channel TOPIC; candidates: "
+        + (", ".join(candidates) if candidates else "none (no channel has a writer)"),
+    )

@@ -1,0 +1,239 @@
+"""Differential analysis (Phase III): two recordings -> the initial deviating module."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rocas.analysis.changepoints import ChangePointConfig, ChangePoints, detect
+from rocas.analysis.cmg import (
+    MODULE,
+    ChannelModuleGraph,
+    CmgSpec,
+    build_cmg,
+    control_channel,
+    load_cmg,
+)
+from rocas.analysis.mdr import Tolerance
+from rocas.analysis.pinpoint import PinpointResult, find_initial_module
+from rocas.analysis.series import ChannelSeries, compute_series
+from rocas.errors import UsageError
+from rocas.recording.decoding import DecoderCache
+from rocas.recording.reader import ChannelInfo, Recording, open_recording
+
+
+@dataclass(frozen=True)
+class ChannelDiff:
+    """One channel's row of the diff report.
+
+    Attributes:
+        topic: channel topic.
+        writers: modules writing it; readers: modules reading it.
+        series: its MDR series.
+        change_points: its change points (t* = ``change_points.first_s``).
+        mdr_before: mean MDR before t* (whole series when there is no t*); None if empty.
+        mdr_after: mean MDR from t* on; None without t*.
+        only_in: "accident"/"reference" for a channel present in one recording only.
+        schema: the schema name.
+    """
+
+    topic: str
+    writers: tuple[str, ...]
+    readers: tuple[str, ...]
+    series: ChannelSeries
+    change_points: ChangePoints
+    mdr_before: float | None
+    mdr_after: float | None
+    only_in: str | None
+    schema: str
+
+    @property
+    def change_point_s(self) -> float | None:
+        return self.change_points.first_s
+
+
+@dataclass(frozen=True)
+class DiffResult:
+    """The result of :func:`diff`, rendered by the CLI (table, JSON, Rerun).
+
+    Attributes:
+        accident: path of the accident recording; reference: of the reference recording.
+        channels: one ChannelDiff per topic, sorted by topic.
+        cmg: the channel-module graph used.
+        pinpoint: Algorithm 1's result (deviating module, walk, removed edges).
+        bin_s: bin width [s]; delta_s: Algorithm 1's window [s].
+        messages_read: decoded messages (accident, reference).
+        warnings: damage and skips found while reading, one line each.
+    """
+
+    accident: str
+    reference: str
+    channels: tuple[ChannelDiff, ...]
+    cmg: ChannelModuleGraph
+    pinpoint: PinpointResult
+    bin_s: float
+    delta_s: float
+    messages_read: tuple[int, int]
+    warnings: tuple[str, ...] = field(default=())
+
+    @property
+    def deviating_module(self) -> str | None:
+        return self.pinpoint.deviating_module
+
+    @property
+    def control_channel(self) -> str:
+        return self.pinpoint.control_channel
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``--json`` object (keys documented in docs/cli.md)."""
+        p = self.pinpoint
+        return {
+            "deviating_module": p.deviating_module,
+            "control_channel": p.control_channel,
+            "path": list(p.path),
+            "delta_s": self.delta_s,
+            "bin_s": self.bin_s,
+            "accident": self.accident,
+            "reference": self.reference,
+            "channels": [
+                {
+                    "topic": c.topic,
+                    "writers": list(c.writers),
+                    "readers": list(c.readers),
+                    "schema": c.schema,
+                    "change_point_s": c.change_point_s,
+                    "change_points_s": list(c.change_points.times_s),
+                    "mdr_before": c.mdr_before,
+                    "mdr_after": c.mdr_after,
+                    "only_in": c.only_in,
+                    "bins": len(c.series.mdr),
+                    "penalty": c.change_points.penalty,
+                }
+                for c in self.channels
+            ],
+            "modules": [
+                {
+                    "name": m,
+                    "change_point_s": p.t_star.get((MODULE, m)),
+                    "reachable": m in p.reachable,
+                    "excluded_because": p.exclusions.get(m),
+                }
+                for m in self.cmg.modules
+            ],
+            "removed_edges": [
+                {"from": e.source[1], "to": e.target[1], "reason": e.reason}
+                for e in p.removed_edges
+            ],
+            "messages_read": {"accident": self.messages_read[0],
+                              "reference": self.messages_read[1]},
+            "warnings": list(self.warnings),
+        }
+
+
+def _means(values: np.ndarray, cps: ChangePoints) -> tuple[float | None, float | None]:
+    if len(values) == 0:
+        return None, None
+    if not cps.indices:
+        return float(values.mean()), None
+    k = cps.indices[0]
+    return float(values[:k].mean()), float(values[k:].mean())
+
+
+def _schema_name(pair: tuple[ChannelInfo | None, ChannelInfo | None]) -> str:
+    info = pair[0] or pair[1]
+    return info.schema_name if info else ""
+
+
+def diff(
+    accident: str | os.PathLike[str],
+    reference: str | os.PathLike[str],
+    *,
+    cmg: str | os.PathLike[str] | CmgSpec | None = None,
+    control_channel_topic: str | None = None,
+    bin_s: float = 0.1,
+    delta_s: float = 3.0,
+    atol: float = 0.0,
+    rtol: float = 0.0,
+    change_points: ChangePointConfig | None = None,
+) -> DiffResult:
+    """Diff two recordings channel by channel and find the initial deviating module.
+
+    Args:
+        accident: the accident recording (its channel metadata gives the topology).
+        reference: the accident-free reference recording.
+        cmg: a CMG JSON path or parsed spec that supplies or overrides the topology.
+        control_channel_topic: the channel Algorithm 1 starts from (overrides metadata).
+        bin_s: bin width of the MDR series [s].
+        delta_s: Algorithm 1's reaction window [s].
+        atol: absolute tolerance for floating-point leaves.
+        rtol: relative tolerance for floating-point leaves.
+        change_points: change point detection settings.
+
+    Raises:
+        InputError: unreadable recordings or CMG file, schema mismatches.
+        TopologyError: no topology, or no control channel.
+    """
+    if not bin_s > 0:
+        raise UsageError(f"--bin must be positive, got {bin_s:g}")
+    if not delta_s >= 0:
+        raise UsageError(f"--delta must be zero or positive, got {delta_s:g}")
+    if atol < 0 or rtol < 0:
+        raise UsageError("--atol and --rtol must be zero or positive")
+    spec = load_cmg(cmg) if isinstance(cmg, (str, os.PathLike)) else cmg
+    cfg = change_points or ChangePointConfig()
+    decoders = DecoderCache()
+    rec_a: Recording = open_recording(accident, decoders)
+    rec_b: Recording = open_recording(reference, decoders)
+
+    res = compute_series(rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol))
+    if sum(res.messages_read) == 0:
+        from rocas.errors import RecordingError
+
+        raise RecordingError(
+            "neither recording holds a readable message", "check the files with 'mcap info'"
+        )
+    channel_infos = list(rec_a.channels.values())
+    known = {c.topic for c in channel_infos}
+    channel_infos += [c for c in rec_b.channels.values() if c.topic not in known]
+    graph = build_cmg(channel_infos, spec)
+    ctrl = control_channel(graph, control_channel_topic, spec)
+
+    rows: list[ChannelDiff] = []
+    t_star: dict[str, float | None] = {}
+    for topic, s in res.series.items():
+        cps = detect(s.mdr, s.times_s, cfg)
+        t_star[topic] = cps.first_s
+        before, after = _means(s.mdr, cps)
+        topo = graph.topology.get(topic)
+        rows.append(
+            ChannelDiff(
+                topic=topic,
+                writers=topo.writers if topo else (),
+                readers=topo.readers if topo else (),
+                series=s,
+                change_points=cps,
+                mdr_before=before,
+                mdr_after=after,
+                only_in=s.only_in,
+                schema=_schema_name(res.channels[topic]),
+            )
+        )
+    pin = find_initial_module(graph, t_star, ctrl, delta_s)
+    warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
+    warnings += tuple(
+        f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
+    )
+    return DiffResult(
+        accident=str(accident),
+        reference=str(reference),
+        channels=tuple(rows),
+        cmg=graph,
+        pinpoint=pin,
+        bin_s=bin_s,
+        delta_s=delta_s,
+        messages_read=res.messages_read,
+        warnings=warnings,
+    )

@@ -1,0 +1,253 @@
+"""Message Difference Ratio (MDR, Definition 5.2 of the paper).
+
+A message is a tree. The children of a message node are *every* field its schema declares,
+in declaration order, so two messages of one type always have the same number of children
+(unset fields hold their defaults). A repeated field is a node with one child per element;
+a map field is a node whose children are its entries ordered by key, each entry a node with
+two children (key, value). Leaves are compared exactly unless a tolerance is given for
+floating-point leaves.
+
+    MDR(t1, t2) = [t1 != t2]                     if both are leaves
+                = 1                              if their child counts differ
+                = mean_i MDR(t1.chd[i], t2.chd[i]) otherwise
+
+JSON-decoded values follow the same rules: an object is a map (entries ordered by key),
+an array is a repeated node, everything else is a leaf.
+
+Two protobuf messages must be instances of the *same* class for the fast paths
+(``a == b`` is evaluated in C); the diff layer guarantees that by decoding both recordings
+of a topic with one class built from their (identical) schema.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from google.protobuf.descriptor import Descriptor, FieldDescriptor
+from google.protobuf.message import Message
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """Closeness for floating-point leaves: ``|a - b| <= atol + rtol * |b|`` counts as equal.
+
+    Attributes:
+        atol: absolute tolerance (same unit as the field).
+        rtol: relative tolerance (dimensionless).
+    """
+
+    atol: float = 0.0
+    rtol: float = 0.0
+
+    @property
+    def exact(self) -> bool:
+        return self.atol == 0.0 and self.rtol == 0.0
+
+
+EXACT = Tolerance()
+
+_FLOAT_TYPES = (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT)
+
+# field kinds of a compiled plan
+_SCALAR, _FLOAT, _MESSAGE, _REP_SCALAR, _REP_FLOAT, _REP_MESSAGE, _MAP = range(7)
+
+
+@dataclass(frozen=True)
+class _Field:
+    name: str
+    kind: int
+    sub: _Plan | None = None  # message plan (message, repeated message, map value)
+    map_value_kind: int = _SCALAR
+
+
+@dataclass(frozen=True)
+class _Plan:
+    full_name: str
+    fields: tuple[_Field, ...]
+
+
+_PLANS: dict[int, _Plan] = {}
+
+
+def _is_repeated(fd: FieldDescriptor) -> bool:
+    flag = getattr(fd, "is_repeated", None)  # protobuf >= 6
+    if flag is not None:
+        return bool(flag)
+    return fd.label == FieldDescriptor.LABEL_REPEATED  # older runtimes
+
+
+def _plan_for(desc: Descriptor) -> _Plan:
+    """Compile (and cache) the comparison plan of a message type."""
+    key = id(desc)
+    plan = _PLANS.get(key)
+    if plan is not None:
+        return plan
+    # placeholder for recursive types; fields are filled below
+    fields: list[_Field] = []
+    plan = _Plan(desc.full_name, ())
+    _PLANS[key] = plan
+    for fd in desc.fields:
+        is_repeated = _is_repeated(fd)
+        if fd.type == FieldDescriptor.TYPE_MESSAGE:
+            mt = fd.message_type
+            if is_repeated and mt.GetOptions().map_entry:
+                vfd = mt.fields_by_name["value"]
+                if vfd.type == FieldDescriptor.TYPE_MESSAGE:
+                    fields.append(_Field(fd.name, _MAP, _plan_for(vfd.message_type), _MESSAGE))
+                elif vfd.type in _FLOAT_TYPES:
+                    fields.append(_Field(fd.name, _MAP, None, _FLOAT))
+                else:
+                    fields.append(_Field(fd.name, _MAP, None, _SCALAR))
+            elif is_repeated:
+                fields.append(_Field(fd.name, _REP_MESSAGE, _plan_for(mt)))
+            else:
+                fields.append(_Field(fd.name, _MESSAGE, _plan_for(mt)))
+        elif fd.type in _FLOAT_TYPES:
+            fields.append(_Field(fd.name, _REP_FLOAT if is_repeated else _FLOAT))
+        else:
+            fields.append(_Field(fd.name, _REP_SCALAR if is_repeated else _SCALAR))
+    object.__setattr__(plan, "fields", tuple(fields))
+    return plan
+
+
+def _float_differs(a: float, b: float, tol: Tolerance) -> bool:
+    if a == b:
+        return False
+    if a != a and b != b:  # both NaN: the same leaf value
+        return False
+    if tol.exact:
+        return True
+    if math.isinf(a) or math.isinf(b):
+        return True
+    return abs(a - b) > tol.atol + tol.rtol * abs(b)
+
+
+def _leaf(a: Any, b: Any, is_float: bool, tol: Tolerance) -> float:
+    if is_float:
+        return 1.0 if _float_differs(a, b, tol) else 0.0
+    return 0.0 if a == b else 1.0
+
+
+def _repeated_leaves(va: Any, vb: Any, is_float: bool, tol: Tolerance) -> float:
+    n = len(va)
+    if n != len(vb):
+        return 1.0
+    if n == 0:
+        return 0.0
+    la, lb = list(va), list(vb)
+    if la == lb:
+        return 0.0
+    if is_float:
+        return sum(_float_differs(x, y, tol) for x, y in zip(la, lb, strict=True)) / n
+    return sum(x != y for x, y in zip(la, lb, strict=True)) / n
+
+
+def _message(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
+    if a == b:
+        return 0.0
+    fields = plan.fields
+    if not fields:
+        return 0.0
+    total = 0.0
+    for f in fields:
+        va = getattr(a, f.name)
+        vb = getattr(b, f.name)
+        kind = f.kind
+        if kind == _SCALAR:
+            if va != vb:
+                total += 1.0
+        elif kind == _FLOAT:
+            if va != vb and _float_differs(va, vb, tol):
+                total += 1.0
+        elif kind == _MESSAGE:
+            total += _message(va, vb, f.sub, tol)  # type: ignore[arg-type]
+        elif kind == _REP_MESSAGE:
+            n = len(va)
+            if n != len(vb):
+                total += 1.0
+            elif n:
+                sub = f.sub
+                total += sum(_message(x, y, sub, tol) for x, y in zip(va, vb, strict=True)) / n
+        elif kind == _MAP:
+            total += _map(va, vb, f, tol)
+        else:  # repeated scalar / float
+            total += _repeated_leaves(va, vb, kind == _REP_FLOAT, tol)
+    return total / len(fields)
+
+
+def _map(va: Any, vb: Any, f: _Field, tol: Tolerance) -> float:
+    n = len(va)
+    if n != len(vb):
+        return 1.0
+    if n == 0:
+        return 0.0
+    total = 0.0
+    for ka, kb in zip(sorted(va), sorted(vb), strict=True):
+        key_score = 0.0 if ka == kb else 1.0
+        if f.map_value_kind == _MESSAGE:
+            val_score = _message(va[ka], vb[kb], f.sub, tol)  # type: ignore[arg-type]
+        else:
+            val_score = _leaf(va[ka], vb[kb], f.map_value_kind == _FLOAT, tol)
+        total += (key_score + val_score) / 2.0
+    return total / n
+
+
+def _json(a: Any, b: Any, tol: Tolerance) -> float:
+    if isinstance(a, dict) and isinstance(b, dict):
+        n = len(a)
+        if n != len(b):
+            return 1.0
+        if n == 0:
+            return 0.0
+        total = 0.0
+        for ka, kb in zip(sorted(a), sorted(b), strict=True):
+            total += ((0.0 if ka == kb else 1.0) + _json(a[ka], b[kb], tol)) / 2.0
+        return total / n
+    if isinstance(a, list) and isinstance(b, list):
+        n = len(a)
+        if n != len(b):
+            return 1.0
+        if n == 0:
+            return 0.0
+        return sum(_json(x, y, tol) for x, y in zip(a, b, strict=True)) / n
+    if isinstance(a, (dict, list)) or isinstance(b, (dict, list)):
+        # an inner node against a leaf: child counts differ unless the node is empty
+        return 1.0
+    if isinstance(a, float) or isinstance(b, float):
+        if isinstance(a, bool) or isinstance(b, bool):
+            return 0.0 if a == b else 1.0
+        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            return 1.0 if _float_differs(float(a), float(b), tol) else 0.0
+    return 0.0 if (type(a) is type(b) and a == b) else 1.0
+
+
+def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
+    """MDR of two decoded messages (protobuf messages of one class, or JSON values).
+
+    Returns:
+        A score in [0, 1]: 0 for identical trees, 1 for entirely different ones.
+    """
+    if isinstance(a, Message) and isinstance(b, Message):
+        if a.DESCRIPTOR.full_name != b.DESCRIPTOR.full_name:
+            return 1.0
+        if type(a) is not type(b):
+            # different classes of one type (decoded from two pools): compare via bytes
+            b2 = type(a)()
+            b2.ParseFromString(b.SerializeToString())
+            b = b2
+        return _message(a, b, _plan_for(a.DESCRIPTOR), tol)
+    if isinstance(a, Message) or isinstance(b, Message):
+        return 1.0
+    return _json(a, b, tol)
+
+
+def mdr_function(tol: Tolerance = EXACT) -> Callable[[Any, Any], float]:
+    """``mdr`` with its tolerance bound, for mapping over message pairs."""
+
+    def score(a: Any, b: Any) -> float:
+        return mdr(a, b, tol)
+
+    return score
