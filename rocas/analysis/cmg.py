@@ -9,10 +9,16 @@ of precedence per channel:
 3. the ROS 1 profile's ``callerid`` metadata, which names the publishing node, as the writer
    when ``rocas.writers`` is absent (``source = "callerid"``).
 
+A topic recorded on several channels (a ROS 1 topic with two publishers has one channel per
+``callerid``) gets the union of their writers and readers.
+
 The CMG JSON format::
 
     {"modules": {"planning": {"reads": ["/prediction"], "writes": ["/planning"]}},
      "control_channel": "/control"}            # optional
+
+``rocas cmg REC --format json`` prints this format plus a ``"channels"`` list (per-channel
+sources); that list is informational and ignored when the file is read back as ``--cmg``.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from typing import Any
 import networkx as nx
 
 from rocas.errors import InputError, TopologyError
+from rocas.recording.annotate import ChannelAnnotation
 from rocas.recording.reader import ChannelInfo
 from rocas.recording.topology import (
     CONTROL_ROLE,
@@ -52,6 +59,7 @@ class ChannelTopology:
         is_control: whether the channel is marked ``rocas.role = control``.
         writers_source: where the writers came from: "cmg", "metadata", "callerid" or "missing".
         readers_source: where the readers came from: "cmg", "metadata" or "missing".
+        in_recording: False for a channel only the CMG file names.
     """
 
     topic: str
@@ -60,6 +68,7 @@ class ChannelTopology:
     is_control: bool = False
     writers_source: str = "missing"
     readers_source: str = "missing"
+    in_recording: bool = True
 
 
 @dataclass(frozen=True)
@@ -84,6 +93,22 @@ class CmgSpec:
         for chans in (*self.writes.values(), *self.reads.values()):
             out.update(chans)
         return out
+
+    def annotations(self) -> dict[str, ChannelAnnotation]:
+        """Per channel the file names: its writers and readers (for ``rocas annotate``)."""
+        return {
+            topic: ChannelAnnotation(
+                writers=tuple(m for m, cs in self.writes.items() if topic in cs),
+                readers=tuple(m for m, cs in self.reads.items() if topic in cs),
+            )
+            for topic in sorted(self.channels())
+        }
+
+    def missing_channels(self, topics: Iterable[str]) -> list[str]:
+        """Channels the file names (control channel included) that are not in ``topics``."""
+        present = set(topics)
+        named = self.channels() | ({self.control_channel} if self.control_channel else set())
+        return sorted(named - present)
 
 
 def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
@@ -110,7 +135,7 @@ def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:
     hint = 'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}'
     if not isinstance(data, dict) or not isinstance(data.get("modules"), dict):
         raise InputError(f"{origin}: key 'modules' must be an object of modules", hint)
-    unknown = set(data) - {"modules", "control_channel"}
+    unknown = set(data) - {"modules", "control_channel", "channels"}
     if unknown:
         raise InputError(f"{origin}: unknown key {sorted(unknown)[0]!r}", hint)
     writes: dict[str, tuple[str, ...]] = {}
@@ -137,33 +162,50 @@ def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:
 def resolve_topology(
     channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None
 ) -> dict[str, ChannelTopology]:
-    """Per-topic topology from channel metadata, ``callerid`` and an optional CMG file."""
-    metas: dict[str, dict[str, str]] = {}
+    """Per-topic topology from channel metadata, ``callerid`` and an optional CMG file.
+
+    A CMG file overrides the metadata of every channel it names, and when it names a
+    control channel, that channel (and no other) is the control channel.
+    """
+    writers_of: dict[str, dict[str, None]] = {}
+    readers_of: dict[str, dict[str, None]] = {}
+    callerids: dict[str, dict[str, None]] = {}
+    control: set[str] = set()
     for ch in channels:
-        merged = metas.setdefault(ch.topic, {})
-        for k, v in ch.metadata.items():
-            merged.setdefault(k, v)
-    topics = set(metas)
+        meta = ch.metadata
+        writers_of.setdefault(ch.topic, {}).update(
+            dict.fromkeys(split_modules(meta.get(WRITERS_KEY)))
+        )
+        readers_of.setdefault(ch.topic, {}).update(
+            dict.fromkeys(split_modules(meta.get(READERS_KEY)))
+        )
+        caller = meta.get(ROS1_CALLERID_KEY, "").strip()
+        if caller:
+            callerids.setdefault(ch.topic, {})[caller] = None
+        if meta.get(ROLE_KEY, "").strip().lower() == CONTROL_ROLE:
+            control.add(ch.topic)
+    recorded = set(writers_of)
     cmg_channels = cmg.channels() if cmg else set()
-    topics |= cmg_channels
+    if cmg is not None and cmg.control_channel:
+        control = {cmg.control_channel}
     out: dict[str, ChannelTopology] = {}
-    for topic in sorted(topics):
-        meta = metas.get(topic, {})
-        is_control = meta.get(ROLE_KEY, "").strip().lower() == CONTROL_ROLE
+    for topic in sorted(recorded | cmg_channels):
+        is_control = topic in control
         if cmg is not None and topic in cmg_channels:
             writers = tuple(m for m, cs in cmg.writes.items() if topic in cs)
             readers = tuple(m for m, cs in cmg.reads.items() if topic in cs)
             out[topic] = ChannelTopology(
                 topic, writers, readers, is_control,
                 "cmg" if writers else "missing", "cmg" if readers else "missing",
+                in_recording=topic in recorded,
             )
             continue
-        writers = split_modules(meta.get(WRITERS_KEY))
+        writers = tuple(writers_of[topic])
         w_src = "metadata" if writers else "missing"
-        if not writers and meta.get(ROS1_CALLERID_KEY, "").strip():
-            writers = (meta[ROS1_CALLERID_KEY].strip(),)
+        if not writers and callerids.get(topic):
+            writers = tuple(callerids[topic])
             w_src = "callerid"
-        readers = split_modules(meta.get(READERS_KEY))
+        readers = tuple(readers_of[topic])
         out[topic] = ChannelTopology(
             topic, writers, readers, is_control, w_src, "metadata" if readers else "missing"
         )

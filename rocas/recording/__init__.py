@@ -1,5 +1,12 @@
 """The MCAP boundary: a streaming reader, a writer and the topology contract."""
 
+from rocas.recording.annotate import (
+    AnnotateReport,
+    ChannelAnnotation,
+    annotate_recording,
+    read_channels,
+)
+from rocas.recording.attach import attach_channel
 from rocas.recording.reader import (
     ChannelInfo,
     ChannelStats,
@@ -37,4 +44,9 @@ __all__ = [
     "register_protobuf_channel",
     "split_modules",
     "topology_metadata",
+    "attach_channel",
+    "AnnotateReport",
+    "ChannelAnnotation",
+    "annotate_recording",
+    "read_channels",
 ]
