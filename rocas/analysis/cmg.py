@@ -4,7 +4,8 @@ A CMG is a directed bipartite graph with an edge module -> channel for every wri
 channel -> module for every reader. rocas learns it from the recording itself, in this order
 of precedence per channel:
 
-1. a ``--cmg`` JSON file, for the channels it names (``source = "cmg"``);
+1. a ``--cmg`` JSON file, for the channels it names as written (writers) or read
+   (readers) by some module (``source = "cmg"``);
 2. the channel metadata ``rocas.writers`` / ``rocas.readers`` (``source = "metadata"``);
 3. the ROS 1 profile's ``callerid`` metadata, which names the publishing node, as the writer
    when ``rocas.writers`` is absent (``source = "callerid"``).
@@ -164,8 +165,9 @@ def resolve_topology(
 ) -> dict[str, ChannelTopology]:
     """Per-topic topology from channel metadata, ``callerid`` and an optional CMG file.
 
-    A CMG file overrides the metadata of every channel it names, and when it names a
-    control channel, that channel (and no other) is the control channel.
+    For a channel the CMG file names, its writers (readers) replace the recorded ones when
+    the file names any; a side the file leaves empty keeps what the recording says. When
+    the file names a control channel, that channel (and no other) is the control channel.
     """
     writers_of: dict[str, dict[str, None]] = {}
     readers_of: dict[str, dict[str, None]] = {}
@@ -190,24 +192,21 @@ def resolve_topology(
         control = {cmg.control_channel}
     out: dict[str, ChannelTopology] = {}
     for topic in sorted(recorded | cmg_channels):
-        is_control = topic in control
-        if cmg is not None and topic in cmg_channels:
-            writers = tuple(m for m, cs in cmg.writes.items() if topic in cs)
-            readers = tuple(m for m, cs in cmg.reads.items() if topic in cs)
-            out[topic] = ChannelTopology(
-                topic, writers, readers, is_control,
-                "cmg" if writers else "missing", "cmg" if readers else "missing",
-                in_recording=topic in recorded,
-            )
-            continue
-        writers = tuple(writers_of[topic])
+        writers = tuple(writers_of.get(topic, ()))
         w_src = "metadata" if writers else "missing"
         if not writers and callerids.get(topic):
             writers = tuple(callerids[topic])
             w_src = "callerid"
-        readers = tuple(readers_of[topic])
+        readers = tuple(readers_of.get(topic, ()))
+        r_src = "metadata" if readers else "missing"
+        if cmg is not None and topic in cmg_channels:
+            if cmg_writers := tuple(m for m, cs in cmg.writes.items() if topic in cs):
+                writers, w_src = cmg_writers, "cmg"
+            if cmg_readers := tuple(m for m, cs in cmg.reads.items() if topic in cs):
+                readers, r_src = cmg_readers, "cmg"
         out[topic] = ChannelTopology(
-            topic, writers, readers, is_control, w_src, "metadata" if readers else "missing"
+            topic, writers, readers, topic in control, w_src, r_src,
+            in_recording=topic in recorded,
         )
     return out
 

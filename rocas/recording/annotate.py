@@ -59,8 +59,8 @@ _DEFAULT_CHUNK_SIZE = 1 << 20  # [bytes] mcap's default
 class ChannelAnnotation:
     """The modules that write and read one channel.
 
-    An empty tuple removes the corresponding key: a channel you name gets exactly the
-    writers and readers you give.
+    An empty side keeps what the recording says (like ``--cmg``, which only replaces the
+    writers or readers it names).
     """
 
     writers: tuple[str, ...] = ()
@@ -119,11 +119,8 @@ def annotated_metadata(
     out = dict(metadata)
     if annotation is not None:
         for key, modules in ((WRITERS_KEY, annotation.writers), (READERS_KEY, annotation.readers)):
-            value = join_modules(modules)
-            if value:
+            if value := join_modules(modules):
                 out[key] = value
-            else:
-                out.pop(key, None)
     if control_channel is not None:
         if topic == control_channel:
             out[ROLE_KEY] = CONTROL_ROLE

@@ -69,7 +69,8 @@ def test_cmg_file_overrides_the_channels_it_names_and_the_control_channel():
     })
     topo = resolve_topology(STACK, spec)
     assert topo["/plan"].writers == ("planner2",) and topo["/plan"].writers_source == "cmg"
-    assert topo["/plan"].readers == () and topo["/plan"].readers_source == "missing"
+    # the file names no reader of /plan: the recorded readers stay
+    assert topo["/plan"].readers == ("control",) and topo["/plan"].readers_source == "metadata"
     assert topo["/obj"].readers == ("planner2",)
     assert topo["/cmd"].writers == ("control",) and topo["/cmd"].writers_source == "metadata"
     assert [t for t, c in topo.items() if c.is_control] == ["/plan"]
