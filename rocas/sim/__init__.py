@@ -1,0 +1,1 @@
+"""The pybullet-free world: map compilation, dynamics, oracles and the batched engine."""

@@ -1,0 +1,106 @@
+"""Vehicle and road-user dynamics: a friction-limited kinematic bicycle and a point model.
+
+Decide first, then integrate (HighwayEnv habit): behaviour code computes commands, these
+functions only integrate them. All functions are vectorised over any leading shape.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.sim.geometry import wrap_angle
+
+GRAVITY_MPS2 = 9.81
+#: Share of the friction circle heavy vehicles can use laterally before they slide
+#: (load transfer and a high centre of gravity); index = model code (sedan, suv, truck, bus).
+LATERAL_GRIP_FACTOR = np.array([1.0, 0.95, 0.55, 0.6])
+SLIP_RELAX_S = 0.6      # [s] time constant with which slip decays when grip returns
+MAX_SLIP_RAD = 0.6      # [rad] body-to-course angle at which a sliding vehicle saturates
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """Planar vehicle states (any leading shape ``(...,)``).
+
+    Attributes:
+        x, y: rear-axle-independent body centre [m].
+        yaw: body heading [rad].
+        course: direction of travel [rad] (differs from ``yaw`` while sliding).
+        speed: [m/s], never negative.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    yaw: np.ndarray
+    course: np.ndarray
+    speed: np.ndarray
+
+
+def bicycle_step(
+    state: VehicleState, accel: np.ndarray, curvature: np.ndarray, friction: np.ndarray,
+    grip_factor: np.ndarray, dt: float,
+) -> tuple[VehicleState, np.ndarray]:
+    """One step of the kinematic bicycle with a friction-limited lateral acceleration.
+
+    Args:
+        state: current state.
+        accel: longitudinal acceleration demanded [m/s^2].
+        curvature: path curvature demanded by the steering, tan(delta) / wheelbase [1/m].
+        friction: road friction coefficient (..., ).
+        grip_factor: share of friction usable laterally (1 cars, ~0.55 trucks).
+        dt: step [s].
+
+    Returns:
+        (next state, realised longitudinal acceleration [m/s^2]).
+
+    When ``v^2 * curvature`` exceeds ``friction * grip * g`` the course only turns as fast as
+    the tyres allow while the body keeps rotating: the vehicle drifts wide and its heading
+    departs from its path tangent.
+    """
+    mu_g = friction * GRAVITY_MPS2
+    a = np.clip(accel, -mu_g, mu_g)
+    v_next = np.maximum(state.speed + a * dt, 0.0)
+    realised = (v_next - state.speed) / dt
+    v_mid = 0.5 * (state.speed + v_next)
+    kappa_max = mu_g * grip_factor / np.maximum(v_mid * v_mid, 1e-6)
+    kappa_eff = np.clip(curvature, -kappa_max, kappa_max)
+    sliding = np.abs(curvature) > kappa_max
+    course = state.course + v_mid * kappa_eff * dt
+    slip = wrap_angle(state.yaw - state.course) + v_mid * (curvature - kappa_eff) * dt
+    slip = np.where(sliding, np.clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
+                    slip * np.exp(-dt / SLIP_RELAX_S))
+    mid_course = 0.5 * (state.course + course)
+    x = state.x + v_mid * np.cos(mid_course) * dt
+    y = state.y + v_mid * np.sin(mid_course) * dt
+    course = wrap_angle(course)
+    return VehicleState(x, y, wrap_angle(course + slip), course, v_next), realised
+
+
+def profile_speed(t: float, knots_t: np.ndarray, knots_v: np.ndarray) -> np.ndarray:
+    """Speed-profile value at time ``t``; knots (..., K), linear between knots, held outside."""
+    k = knots_t.shape[-1]
+    if k == 1:
+        return knots_v[..., 0]
+    idx = np.clip((knots_t <= t).sum(-1) - 1, 0, k - 2)
+    t0 = np.take_along_axis(knots_t, idx[..., None], -1)[..., 0]
+    t1 = np.take_along_axis(knots_t, idx[..., None] + 1, -1)[..., 0]
+    v0 = np.take_along_axis(knots_v, idx[..., None], -1)[..., 0]
+    v1 = np.take_along_axis(knots_v, idx[..., None] + 1, -1)[..., 0]
+    u = np.clip((t - t0) / np.maximum(t1 - t0, 1e-9), 0.0, 1.0)
+    return v0 + u * (v1 - v0)
+
+
+def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Interpolate equally spaced paths (..., P, 2) at arc length s (...) -> x, y, heading."""
+    p = path.shape[-2]
+    f = np.clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
+    i = f.astype(np.int64)
+    u = f - i
+    i0 = i[..., None, None]
+    a = np.take_along_axis(path, np.broadcast_to(i0, (*i.shape, 1, 2)), -2)[..., 0, :]
+    b = np.take_along_axis(path, np.broadcast_to(i0 + 1, (*i.shape, 1, 2)), -2)[..., 0, :]
+    h = np.take_along_axis(heading, i[..., None], -1)[..., 0]
+    return a[..., 0] + u * (b[..., 0] - a[..., 0]), a[..., 1] + u * (b[..., 1] - a[..., 1]), h

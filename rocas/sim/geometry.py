@@ -1,0 +1,168 @@
+"""Vectorised planar geometry: angles, oriented boxes, polylines, polygons, rays."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray:
+    """Angles wrapped to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def box_gap(
+    ax: np.ndarray, ay: np.ndarray, ayaw: np.ndarray, ahl: np.ndarray, ahw: np.ndarray,
+    bx: np.ndarray, by: np.ndarray, byaw: np.ndarray, bhl: np.ndarray, bhw: np.ndarray,
+) -> np.ndarray:
+    """Separating-axis gap between oriented boxes (broadcasting shapes).
+
+    Returns the largest separation over the four box axes [m]: negative when the boxes
+    overlap (penetration depth), positive otherwise (a lower bound of the true distance).
+    """
+    dx = bx - ax
+    dy = by - ay
+    ca, sa = np.cos(ayaw), np.sin(ayaw)
+    cb, sb = np.cos(byaw), np.sin(byaw)
+    # relative orientation terms
+    cab = np.abs(ca * cb + sa * sb)  # |cos(a-b)|
+    sab = np.abs(sa * cb - ca * sb)  # |sin(a-b)|
+    g1 = np.abs(dx * ca + dy * sa) - (ahl + bhl * cab + bhw * sab)
+    g2 = np.abs(-dx * sa + dy * ca) - (ahw + bhl * sab + bhw * cab)
+    g3 = np.abs(dx * cb + dy * sb) - (bhl + ahl * cab + ahw * sab)
+    g4 = np.abs(-dx * sb + dy * cb) - (bhw + ahl * sab + ahw * cab)
+    return np.maximum(np.maximum(g1, g2), np.maximum(g3, g4))
+
+
+def box_corners(x: np.ndarray, y: np.ndarray, yaw: np.ndarray, hl: np.ndarray, hw: np.ndarray
+                ) -> np.ndarray:
+    """Corners of oriented boxes, shape ``(..., 4, 2)`` (front-left, front-right, rear-right,
+    rear-left)."""
+    c, s = np.cos(yaw)[..., None], np.sin(yaw)[..., None]
+    lx = np.array([1.0, 1.0, -1.0, -1.0]) * np.asarray(hl)[..., None]
+    ly = np.array([1.0, -1.0, -1.0, 1.0]) * np.asarray(hw)[..., None]
+    px = np.asarray(x)[..., None] + lx * c - ly * s
+    py = np.asarray(y)[..., None] + lx * s + ly * c
+    return np.stack([px, py], axis=-1)
+
+
+def resample_polyline(points: np.ndarray, count: int) -> tuple[np.ndarray, float]:
+    """Resample a polyline (P, 2) to ``count`` equally spaced points; returns (points, spacing)."""
+    seg = np.hypot(*np.diff(points, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    total = float(s[-1])
+    t = np.linspace(0.0, total, count)
+    return np.stack([np.interp(t, s, points[:, 0]), np.interp(t, s, points[:, 1])], -1), (
+        total / (count - 1) if count > 1 else 0.0)
+
+
+def polyline_headings(points: np.ndarray) -> np.ndarray:
+    """Tangent heading at each point of (..., P, 2) polylines [rad] (central differences)."""
+    d = np.gradient(points, axis=-2)
+    return np.arctan2(d[..., 1], d[..., 0])
+
+
+def polyline_curvature(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Signed curvature of an equally spaced polyline (P, 2) [1/m]."""
+    h = np.unwrap(polyline_headings(points))
+    return np.gradient(h) / max(spacing, 1e-9)
+
+
+def points_in_polygons(px: np.ndarray, py: np.ndarray, edges: np.ndarray, edge_owner: np.ndarray,
+                       num_polygons: int) -> np.ndarray:
+    """Even-odd point-in-polygon test.
+
+    Args:
+        px, py: points, shape (..., K).
+        edges: polygon edges (E, 4) as x0, y0, x1, y1.
+        edge_owner: polygon index of each edge (E,).
+        num_polygons: G.
+
+    Returns:
+        bool array (..., K, G).
+    """
+    x0, y0, x1, y1 = edges[:, 0], edges[:, 1], edges[:, 2], edges[:, 3]
+    X = px[..., None]
+    Y = py[..., None]
+    straddle = (y0 > Y) != (y1 > Y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = x0 + (Y - y0) * (x1 - x0) / (y1 - y0)
+    cross = straddle & (X < xc)
+    onehot = np.zeros((edges.shape[0], num_polygons))
+    onehot[np.arange(edges.shape[0]), edge_owner] = 1.0
+    counts = cross.astype(np.float64) @ onehot
+    return (np.round(counts).astype(np.int64) % 2) == 1
+
+
+def segments_blocked(ox: np.ndarray, oy: np.ndarray, tx: np.ndarray, ty: np.ndarray,
+                     edges: np.ndarray) -> np.ndarray:
+    """Whether the segment from (ox, oy) to (tx, ty) crosses each edge.
+
+    Shapes: ``ox, oy`` broadcastable against ``tx, ty`` (..., K); edges (E, 4).
+    Returns bool (..., K, E).
+    """
+    x0, y0, x1, y1 = edges[:, 0], edges[:, 1], edges[:, 2], edges[:, 3]
+    rx = (tx - ox)[..., None]
+    ry = (ty - oy)[..., None]
+    sx = x1 - x0
+    sy = y1 - y0
+    qpx = x0 - np.asarray(ox)[..., None]
+    qpy = y0 - np.asarray(oy)[..., None]
+    denom = rx * sy - ry * sx
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qpx * sy - qpy * sx) / denom
+        u = (qpx * ry - qpy * rx) / denom
+    return (np.abs(denom) > 1e-12) & (t > 0.0) & (t < 1.0) & (u >= 0.0) & (u <= 1.0)
+
+
+class NearestGrid:
+    """Nearest-point queries against a fixed point set (lane samples, a reference line).
+
+    A regular grid stores, per cell, the K points nearest to the cell centre within a radius;
+    a query checks only those K candidates. Queries far from every point return the sentinel
+    index ``num_points`` (callers pad their arrays with a far-away point there).
+    """
+
+    def __init__(self, origin: np.ndarray, cell_m: float, candidates: np.ndarray) -> None:
+        self.origin = origin
+        self.cell_m = cell_m
+        self.candidates = candidates  # (GX, GY, K) int
+        self.shape = candidates.shape[:2]
+
+    @classmethod
+    def build(cls, points: np.ndarray, cell_m: float, k: int, margin_m: float) -> NearestGrid:
+        lo = points.min(axis=0) - margin_m
+        hi = points.max(axis=0) + margin_m
+        gx, gy = (np.ceil((hi - lo) / cell_m).astype(int) + 1).tolist()
+        cx = lo[0] + (np.arange(gx) + 0.5) * cell_m
+        cy = lo[1] + (np.arange(gy) + 0.5) * cell_m
+        centers = np.stack(np.meshgrid(cx, cy, indexing="ij"), -1).reshape(-1, 2)
+        n = points.shape[0]
+        k_eff = min(k, n)
+        cand = np.full((centers.shape[0], k), n, dtype=np.int64)
+        radius = cell_m * 0.75 + margin_m
+        for start in range(0, centers.shape[0], 1024):
+            c = centers[start:start + 1024]
+            d2 = (c[:, None, 0] - points[None, :, 0]) ** 2 + (c[:, None, 1] - points[None, :, 1]) ** 2
+            idx = np.argpartition(d2, k_eff - 1, axis=1)[:, :k_eff]
+            near = np.take_along_axis(d2, idx, 1) <= radius * radius
+            cand[start:start + 1024, :k_eff] = np.where(near, idx, n)
+        return cls(lo, cell_m, cand.reshape(gx, gy, k))
+
+    def query(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Candidate point indices near (x, y), shape (..., K)."""
+        ix = np.clip(((x - self.origin[0]) / self.cell_m).astype(np.int64), 0, self.shape[0] - 1)
+        iy = np.clip(((y - self.origin[1]) / self.cell_m).astype(np.int64), 0, self.shape[1] - 1)
+        return self.candidates[ix, iy]
+
+
+def nearest_on(points: np.ndarray, grid: NearestGrid, x: np.ndarray, y: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Index of the nearest point of ``points`` and the squared distance to it, for query
+    points of any shape (far queries land on the last point, at a large distance)."""
+    cand = np.minimum(grid.query(x, y), points.shape[0] - 1)
+    px = points[cand, 0]
+    py = points[cand, 1]
+    d2 = (px - x[..., None]) ** 2 + (py - y[..., None]) ** 2
+    j = np.argmin(d2, axis=-1)
+    return (np.take_along_axis(cand, j[..., None], -1)[..., 0],
+            np.take_along_axis(d2, j[..., None], -1)[..., 0])
