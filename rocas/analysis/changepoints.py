@@ -3,14 +3,24 @@
 ``ruptures.KernelCPD(kernel="linear")`` runs exact PELT for the l2 (change in mean) cost
 in C; it finds the same change points as ``ruptures.Pelt(model="l2")``, about 1000x faster.
 
+Before PELT the series passes through a running median of ``smooth_bins`` bins (1 turns it
+off). A message that falls into the neighbouring bin in one recording only is unpaired and
+scores 1 in two adjacent bins: an impulse, not a change of regime. A median filter removes
+impulses up to half its width while keeping step edges (and so change point times) exactly.
+
 The penalty follows the paper's argument that the first seconds of two compared runs are
 alike, so their MDR is the channel's baseline noise:
 
-    penalty = penalty_scale * max(var(baseline), noise_floor**2) * ln(n)
+    noise**2 = max(var(baseline), var(diff(series)) / 2, noise_floor**2)
+    penalty  = penalty_scale * noise**2 * ln(n)
 
 where ``baseline`` is the part of the series in its first ``baseline_s`` seconds and ``n``
-the series length (a BIC-like penalty scaled by the channel's own noise). The floor keeps a
-noiseless baseline (identical runs) from making every wiggle a change point. An explicit
+the series length (a BIC-like penalty scaled by the channel's own noise). The second term
+estimates bin-to-bin noise over the whole series from first differences: a level shift adds
+a single large difference and barely moves it, while isolated spikes (a message that falls
+into the neighbouring bin in one recording and so goes unpaired) raise it, so rare spikes a
+short baseline happened not to contain do not become change points. The floor keeps a
+noiseless series (identical runs) from making every wiggle a change point. An explicit
 ``penalty`` replaces the formula.
 """
 
@@ -33,6 +43,7 @@ class ChangePointConfig:
         noise_floor: smallest baseline standard deviation assumed [MDR units].
         penalty: fixed penalty; None derives it from the baseline.
         min_size: fewest bins in a segment.
+        smooth_bins: width of the running median applied first (odd; 1 = none).
     """
 
     baseline_s: float = 3.0
@@ -40,6 +51,18 @@ class ChangePointConfig:
     noise_floor: float = 0.02
     penalty: float | None = None
     min_size: int = 2
+    smooth_bins: int = 5
+
+
+def median_filter(values: np.ndarray, width: int) -> np.ndarray:
+    """Running median of ``values`` (shape (n,)) over ``width`` samples, edges held."""
+    if width <= 1 or len(values) < 3:
+        return values
+    width = width + 1 - width % 2  # odd
+    half = width // 2
+    padded = np.concatenate([np.full(half, values[0]), values, np.full(half, values[-1])])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, width)
+    return np.median(windows, axis=1)
 
 
 @dataclass(frozen=True)
@@ -47,10 +70,10 @@ class ChangePoints:
     """Change points of one series.
 
     Attributes:
-        times_s: change point times, ascending [s]: the start of each new segment.
+        times_s: change point times, ascending [s]: the first bin of each new segment.
         indices: (k,) index into the series of each new segment's first bin.
         penalty: the penalty used.
-        baseline_std: the baseline's standard deviation [MDR units].
+        baseline_std: the estimated noise standard deviation [MDR units].
     """
 
     times_s: tuple[float, ...]
@@ -69,7 +92,9 @@ def penalty_for(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig)
 ]:
     """(penalty, baseline std) for a series, per the module docstring."""
     base = values[times_s < times_s[0] + cfg.baseline_s] if len(values) else values
-    std = float(np.std(base)) if len(base) > 1 else 0.0
+    base_var = float(np.var(base)) if len(base) > 1 else 0.0
+    diff_var = float(np.var(np.diff(values))) / 2.0 if len(values) > 2 else 0.0
+    std = math.sqrt(max(base_var, diff_var))
     if cfg.penalty is not None:
         return float(cfg.penalty), std
     var = max(std, cfg.noise_floor) ** 2
@@ -78,9 +103,10 @@ def penalty_for(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig)
 
 def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> ChangePoints:
     """Detect the change points of ``values`` (shape (n,)) sampled at ``times_s`` (shape (n,))."""
-    values = np.asarray(values, dtype=np.float64)
+    raw = np.asarray(values, dtype=np.float64)
     times_s = np.asarray(times_s, dtype=np.float64)
-    penalty, std = penalty_for(values, times_s, cfg)
+    penalty, std = penalty_for(raw, times_s, cfg)  # noise of the raw series, impulses included
+    values = median_filter(raw, cfg.smooth_bins)
     if len(values) < 2 * cfg.min_size or np.all(values == values[0]):
         return ChangePoints((), (), penalty, std)
     algo = ruptures.KernelCPD(kernel="linear", min_size=cfg.min_size, jump=1)

@@ -158,6 +158,7 @@ def diff(
     atol: float = 0.0,
     rtol: float = 0.0,
     change_points: ChangePointConfig | None = None,
+    strict_bins: bool = False,
 ) -> DiffResult:
     """Diff two recordings channel by channel and find the initial deviating module.
 
@@ -171,6 +172,7 @@ def diff(
         atol: absolute tolerance for floating-point leaves.
         rtol: relative tolerance for floating-point leaves.
         change_points: change point detection settings.
+        strict_bins: pair messages only within their own bin (no adjacent-bin pairing).
 
     Raises:
         InputError: unreadable recordings or CMG file, schema mismatches.
@@ -188,7 +190,10 @@ def diff(
     rec_a: Recording = open_recording(accident, decoders)
     rec_b: Recording = open_recording(reference, decoders)
 
-    res = compute_series(rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol))
+    res = compute_series(
+        rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
+        adjacent_pairing=not strict_bins,
+    )
     if sum(res.messages_read) == 0:
         from rocas.errors import RecordingError
 

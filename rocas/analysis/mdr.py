@@ -69,7 +69,8 @@ class _Plan:
     fields: tuple[_Field, ...]
 
 
-_PLANS: dict[int, _Plan] = {}
+# keyed by the descriptor object itself (not id(): a freed pool's ids get reused)
+_PLANS: dict[Descriptor, _Plan] = {}
 
 
 def _is_repeated(fd: FieldDescriptor) -> bool:
@@ -81,7 +82,7 @@ def _is_repeated(fd: FieldDescriptor) -> bool:
 
 def _plan_for(desc: Descriptor) -> _Plan:
     """Compile (and cache) the comparison plan of a message type."""
-    key = id(desc)
+    key = desc
     plan = _PLANS.get(key)
     if plan is not None:
         return plan

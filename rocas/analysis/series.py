@@ -2,10 +2,20 @@
 
 Both recordings are aligned at their first message (t = 0): the earliest log time in the
 file's summary statistics, or the first message read when the file has no summary (a
-truncated log). Time is cut into bins of ``bin_s`` seconds. Within a bin, the k-th message
+truncated log). Time is cut into bins of ``bin_s`` seconds, centred on multiples of
+``bin_s`` (bin j covers [(j - 1/2) bin_s, (j + 1/2) bin_s)): a periodic channel whose period
+is a multiple of the bin width, published in phase with the first message (the common
+case, e.g. 10 Hz with 0.1 s bins), then sits mid-bin, and timing jitter does not push its
+messages across a bin edge in one recording only. Within a bin, the k-th message
 of a channel in one recording pairs with the k-th message of that channel in the other;
 a message without a partner scores 1; the bin's MDR is the mean over its messages.
 Bins in which neither recording has a message on the channel carry no value.
+
+One refinement, on unless ``adjacent_pairing=False`` (``--strict-bins``): messages left
+unpaired in bin j pair, in order, with the *other* recording's messages left unpaired in
+bin j + 1 before anything scores 1. A message published within its jitter of a bin edge
+lands on different sides of the edge in the two runs; without this, such a channel scores
+1 in almost every bin and its real deviation is invisible. The pair's MDR counts in bin j.
 
 Memory stays flat: only the bins within ``reorder_window_s`` of the slower stream's
 position are held.
@@ -33,7 +43,7 @@ class ChannelSeries:
 
     Attributes:
         topic: channel topic.
-        times_s: (n,) start time of each bin that holds a message [s since alignment].
+        times_s: (n,) centre time of each bin that holds a message [s since alignment].
         mdr: (n,) MDR of each such bin, in [0, 1].
         messages: (n, 2) message counts per bin in (accident, reference).
         only_in: "accident" or "reference" when the channel exists in one recording only.
@@ -47,10 +57,56 @@ class ChannelSeries:
 
 
 @dataclass
+class _Pending:
+    """A bin whose score waits for the next bin (which may take its leftovers)."""
+
+    index: int
+    scores: list[float]
+    leftover_side: int
+    leftover: list[Any]
+    counts: tuple[int, int]
+
+
+@dataclass
 class _Acc:
     bins: list[int] = field(default_factory=list)
     values: list[float] = field(default_factory=list)
     counts: list[tuple[int, int]] = field(default_factory=list)
+    pending: _Pending | None = None
+
+    def finish_pending(self) -> None:
+        p = self.pending
+        if p is None:
+            return
+        n = len(p.scores) + len(p.leftover)
+        if n:
+            self.bins.append(p.index)
+            self.values.append((sum(p.scores) + len(p.leftover)) / n)
+            self.counts.append(p.counts)
+        self.pending = None
+
+    def add_bin(
+        self, index: int, a_msgs: list[Any], b_msgs: list[Any], tol: Tolerance, adjacent: bool
+    ) -> None:
+        """Score bin ``index`` (bins arrive in increasing order)."""
+        paired = min(len(a_msgs), len(b_msgs))
+        scores = [mdr(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
+        side = ACCIDENT if len(a_msgs) > paired else REFERENCE
+        leftover = (a_msgs if side == ACCIDENT else b_msgs)[paired:]
+        counts = (len(a_msgs), len(b_msgs))
+        p = self.pending
+        if (
+            adjacent and p is not None and p.index == index - 1 and p.leftover and leftover
+            and p.leftover_side != side
+        ):
+            k = min(len(p.leftover), len(leftover))
+            for x, y in zip(p.leftover[:k], leftover[:k], strict=True):
+                a, b = (x, y) if p.leftover_side == ACCIDENT else (y, x)
+                p.scores.append(mdr(a, b, tol))
+            p.leftover = p.leftover[k:]
+            leftover = leftover[k:]
+        self.finish_pending()
+        self.pending = _Pending(index, scores, side, leftover, counts)
 
 
 @dataclass(frozen=True)
@@ -70,13 +126,6 @@ class SeriesResult:
     bin_s: float
 
 
-def _bin_mdr(a_msgs: list[Any], b_msgs: list[Any], tol: Tolerance) -> float:
-    n = max(len(a_msgs), len(b_msgs))
-    paired = min(len(a_msgs), len(b_msgs))
-    total = float(n - paired)  # unpaired messages score 1 each
-    for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True):
-        total += mdr(x, y, tol)
-    return total / n
 
 
 def compute_series(
@@ -86,6 +135,7 @@ def compute_series(
     bin_s: float = 0.1,
     tolerance: Tolerance = EXACT,
     reorder_window_s: float = 1.0,
+    adjacent_pairing: bool = True,
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
@@ -105,7 +155,7 @@ def compute_series(
     def bin_of(side: int, msg: DecodedMessage) -> int:
         if starts[side] is None:
             starts[side] = msg.log_time_ns
-        return max(0, int((msg.log_time_ns - starts[side]) // bin_ns))
+        return max(0, math.floor((msg.log_time_ns - starts[side]) / bin_ns + 0.5))
 
     def note_channel(side: int, info: ChannelInfo) -> None:
         pair = channels.get(info.topic)
@@ -129,10 +179,7 @@ def compute_series(
     def flush(below: int) -> None:
         for b in sorted(k for k in open_bins if k < below):
             for topic, (xs, ys) in open_bins.pop(b).items():
-                a = acc.setdefault(topic, _Acc())
-                a.bins.append(b)
-                a.values.append(_bin_mdr(xs, ys, tolerance))
-                a.counts.append((len(xs), len(ys)))
+                acc.setdefault(topic, _Acc()).add_bin(b, xs, ys, tolerance, adjacent_pairing)
 
     streams: list[Iterator[DecodedMessage]] = [accident.decoded(), reference.decoded()]
     heads: list[DecodedMessage | None] = [next(streams[0], None), next(streams[1], None)]
@@ -157,6 +204,8 @@ def compute_series(
             if low != math.inf:
                 flush(int(low) - window_bins)
     flush(2**62)
+    for a in acc.values():
+        a.finish_pending()
 
     series: dict[str, ChannelSeries] = {}
     for topic in sorted(channels):

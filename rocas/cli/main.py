@@ -38,14 +38,15 @@ COMMANDS: dict[str, str] = {
 }
 
 
+class _ArgumentError(Exception):
+    """A command-line usage error, raised by the parser and reported by :func:`main`."""
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse that reports usage errors in rocas's one-line format (exit 2)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(
-            ExitStatus.USAGE,
-            f"rocas: error: {message} (see '{self.prog} --help')\n",
-        )
+        raise _ArgumentError(f"{message} (see '{self.prog} --help')")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -77,7 +78,13 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     """Entry point of the console script; returns (and, as a script, exits with) a status."""
     env = env or Env()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except _ArgumentError as exc:
+        env.error(str(exc))
+        return ExitStatus.USAGE
+    except SystemExit as exc:  # --help and --version
+        return int(exc.code or 0)
     if not getattr(args, "command", None):
         parser.print_help(env.stderr)
         return ExitStatus.USAGE

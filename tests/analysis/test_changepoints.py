@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+import ruptures
+
+from rocas.analysis.changepoints import ChangePointConfig, detect, median_filter
+
+
+def _step(n=200, at=120, low=0.1, high=0.5, noise=0.02, seed=0):
+    rng = np.random.default_rng(seed)
+    y = np.where(np.arange(n) < at, low, high) + rng.normal(0, noise, n)
+    return np.clip(y, 0, 1), np.arange(n) * 0.1
+
+
+def test_finds_a_step_at_its_time():
+    y, t = _step()
+    cps = detect(y, t, ChangePointConfig())
+    assert cps.first_s == pytest.approx(12.0, abs=0.15)
+
+
+def test_noise_alone_has_no_change_point():
+    for seed in range(5):
+        y, t = _step(high=0.1, seed=seed)
+        assert detect(y, t, ChangePointConfig()).first_s is None
+
+
+def test_identical_runs_have_no_change_point():
+    assert detect(np.zeros(100), np.arange(100) * 0.1, ChangePointConfig()).first_s is None
+
+
+def test_isolated_impulses_are_not_change_points():
+    y = np.full(150, 0.3)
+    y[[40, 41, 90, 120]] = 1.0  # messages that slipped into a neighbouring bin
+    assert detect(y, np.arange(150) * 0.1, ChangePointConfig()).first_s is None
+
+
+def test_penalty_scales_with_baseline_noise():
+    quiet, t = _step(noise=0.01)
+    noisy, _ = _step(noise=0.1)
+    cfg = ChangePointConfig()
+    assert detect(noisy, t, cfg).penalty > detect(quiet, t, cfg).penalty
+
+
+def test_fixed_penalty_overrides_the_formula():
+    y, t = _step()
+    assert detect(y, t, ChangePointConfig(penalty=1e6)).first_s is None
+    assert detect(y, t, ChangePointConfig(penalty=0.5)).penalty == 0.5
+
+
+def test_kernel_linear_is_exact_pelt_l2():
+    """The fast solver computes the same segmentation as ruptures' Pelt with the l2 cost."""
+    for seed in range(3):
+        y, _ = _step(n=120, at=70, noise=0.05, seed=seed)
+        y = y.reshape(-1, 1)
+        fast = ruptures.KernelCPD(kernel="linear", min_size=2, jump=1).fit(y).predict(pen=0.05)
+        slow = ruptures.Pelt(model="l2", min_size=2, jump=1).fit(y).predict(pen=0.05)
+        assert fast == slow
+
+
+def test_median_filter_removes_impulses_and_keeps_steps():
+    y = np.array([0, 0, 0, 1, 0, 0, 0, 5, 5, 5, 5, 5], dtype=float)
+    out = median_filter(y, 5)
+    assert out[3] == 0
+    assert list(np.nonzero(out >= 5)[0]) == [7, 8, 9, 10, 11]
+    assert median_filter(y, 1) is y

@@ -1,0 +1,63 @@
+"""End to end on recordings of a stack unlike rocas's ADS, where the answer is known."""
+
+import pytest
+from foreign_stack import CONTROL, make_pair
+
+from rocas.analysis import diff
+from rocas.errors import TopologyError
+
+
+@pytest.mark.parametrize("deviating", ["tracker", "forecaster", "behaviour"])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_finds_the_module_that_deviated_first(tmp_path, deviating, seed):
+    pair = make_pair(tmp_path, deviating=deviating, seed=seed)
+    r = diff(pair.accident, pair.reference)
+    assert r.deviating_module == deviating
+    assert r.control_channel == CONTROL
+    assert r.pinpoint.path[0] == CONTROL and r.pinpoint.path[-1] == deviating
+    by_topic = {c.topic: c for c in r.channels}
+    # the early distractor is excluded, as /apollo/canbus/chassis is in Appendix A
+    assert by_topic["/vehicle/state"].change_point_s == pytest.approx(1.5, abs=0.15)
+    assert "not reachable" in r.pinpoint.exclusions["vehicle"]
+    assert by_topic["/sensing/cloud"].change_point_s is None  # noise only
+
+
+def test_no_deviation_gives_no_module(tmp_path):
+    pair = make_pair(tmp_path, deviating=None, distractor_at_s=None)
+    r = diff(pair.accident, pair.reference)
+    assert r.deviating_module is None
+    assert all(c.change_point_s is None for c in r.channels)
+
+
+def test_json_channel_is_compared(tmp_path):
+    pair = make_pair(tmp_path)
+    r = diff(pair.accident, pair.reference)
+    diag = {c.topic: c for c in r.channels}["/diag/status"]
+    assert len(diag.series.mdr) > 0 and diag.mdr_before == 0.0
+
+
+def test_without_topology_the_error_names_both_remedies(tmp_path):
+    pair = make_pair(tmp_path, topology=False)
+    with pytest.raises(TopologyError) as exc:
+        diff(pair.accident, pair.reference)
+    assert "--cmg" in str(exc.value) and "rocas annotate" in str(exc.value)
+
+
+def test_cmg_file_supplies_the_topology(tmp_path):
+    import json
+
+    from foreign_stack import TOPOLOGY
+
+    pair = make_pair(tmp_path, topology=False, deviating="tracker")
+    spec = {"modules": {m: {"reads": list(r), "writes": list(w)} for m, (r, w) in TOPOLOGY.items()},
+            "control_channel": CONTROL}
+    cmg = tmp_path / "cmg.json"
+    cmg.write_text(json.dumps(spec))
+    assert diff(pair.accident, pair.reference, cmg=cmg).deviating_module == "tracker"
+
+
+def test_same_inputs_same_result(tmp_path):
+    pair = make_pair(tmp_path)
+    a = diff(pair.accident, pair.reference).to_json()
+    b = diff(pair.accident, pair.reference).to_json()
+    assert a == b

@@ -1,0 +1,66 @@
+"""Algorithm 1 on the paper's Appendix A example."""
+
+import pytest
+
+from rocas.analysis.cmg import CHANNEL, MODULE, build_cmg, parse_cmg
+from rocas.analysis.pinpoint import find_initial_module
+
+APOLLO = parse_cmg({"modules": {
+    "perception": {"writes": ["/apollo/perception/obstacles"]},
+    "prediction": {"reads": ["/apollo/perception/obstacles"], "writes": ["/apollo/prediction"]},
+    "planning": {"reads": ["/apollo/perception/obstacles", "/apollo/prediction",
+                           "/apollo/canbus/chassis"], "writes": ["/apollo/planning"]},
+    "control": {"reads": ["/apollo/planning", "/apollo/canbus/chassis"],
+                "writes": ["/apollo/control"]},
+    "canbus": {"reads": ["/apollo/control"], "writes": ["/apollo/canbus/chassis"]},
+}})
+APPENDIX_A = {
+    "/apollo/prediction": 4.5,
+    "/apollo/planning": 7.0,
+    "/apollo/canbus/chassis": 1.5,
+    "/apollo/control": 7.1,
+    "/apollo/perception/obstacles": None,
+}
+
+
+def _run(t_star, delta=3.0):
+    return find_initial_module(build_cmg([], APOLLO), t_star, "/apollo/control", delta)
+
+
+def test_appendix_a_finds_prediction_with_the_paper_walk():
+    r = _run(APPENDIX_A)
+    assert r.deviating_module == "prediction"
+    assert r.path == ("/apollo/control", "control", "/apollo/planning", "planning",
+                      "/apollo/prediction", "prediction")
+    removed = {(e.source, e.target) for e in r.removed_edges}
+    assert ((CHANNEL, "/apollo/canbus/chassis"), (MODULE, "control")) in removed
+    assert "canbus" not in r.reachable
+    assert "not reachable" in r.exclusions["canbus"]
+    assert r.t_star[(MODULE, "canbus")] == 1.5
+
+
+def test_module_t_star_is_the_min_over_written_channels():
+    r = _run(APPENDIX_A)
+    assert r.t_star[(MODULE, "planning")] == 7.0
+    assert r.t_star[(MODULE, "perception")] is None
+
+
+def test_a_small_delta_cuts_the_walk_short():
+    r = _run(APPENDIX_A, delta=0.5)  # 4.5 is not within [6.5, 7.0]
+    assert r.deviating_module == "planning"
+
+
+def test_no_change_on_the_control_channel_means_no_module():
+    r = _run({**APPENDIX_A, "/apollo/control": None})
+    assert r.deviating_module is None
+    assert r.path == ()
+
+
+def test_edge_window_is_inclusive():
+    r = _run({**APPENDIX_A, "/apollo/prediction": 4.0})  # exactly t*(planning) - delta
+    assert r.deviating_module == "prediction"
+
+
+@pytest.mark.parametrize("order", [list(APPENDIX_A), list(reversed(APPENDIX_A))])
+def test_result_does_not_depend_on_input_order(order):
+    assert _run({k: APPENDIX_A[k] for k in order}).deviating_module == "prediction"

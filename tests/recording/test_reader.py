@@ -1,0 +1,127 @@
+import json
+
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer
+
+from rocas.errors import InputError, RecordingError
+from rocas.msgs import control_pb2, planning_pb2
+from rocas.recording import RecordingWriter, open_recording
+
+
+def _write(path, n=300, chunk_size=2048, compression="zstd"):
+    with RecordingWriter(path, chunk_size=chunk_size, compression=compression) as w:
+        w.add_channel("/control", control_pb2.ControlCommand, writers=["control"], role="control")
+        w.add_channel("/planning", planning_pb2.ADCTrajectory, writers=["planning"],
+                      readers=["control"])
+        for i in range(n):
+            w.write("/control", control_pb2.ControlCommand(throttle=i), log_time_ns=i * 10**7)
+            m = planning_pb2.ADCTrajectory(lane_id=f"l{i}")
+            w.write("/planning", m, log_time_ns=i * 10**7 + 1)
+        w.add_attachment("rocas/world.json", b'{"lanes": []}', media_type="application/json")
+    return path
+
+
+def _chunk_offsets(path):
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    return sorted(ci.chunk_start_offset for ci in summary.chunk_indexes)
+
+
+def test_reads_messages_channels_and_attachments(tmp_path):
+    rec = open_recording(_write(tmp_path / "r.mcap"))
+    msgs = list(rec.decoded())
+    assert len(msgs) == 600
+    assert msgs[0].message.throttle == 0 and msgs[1].message.lane_id == "l0"
+    assert rec.report.complete and not rec.report.truncated
+    topics = rec.topics()
+    assert topics["/control"].metadata["rocas.role"] == "control"
+    assert topics["/planning"].metadata["rocas.readers"] == "control"
+    assert rec.attachment("rocas/world.json") == b'{"lanes": []}'
+    assert rec.report.channel_stats["/control"].decoded == 300
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_every_compression_reads(tmp_path, compression):
+    rec = open_recording(_write(tmp_path / "r.mcap", compression=compression))
+    assert sum(1 for _ in rec.decoded()) == 600
+
+
+def test_truncated_file_is_read_up_to_the_last_complete_record(tmp_path):
+    path = _write(tmp_path / "r.mcap")
+    data = path.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    rec = open_recording(cut)
+    n = sum(1 for _ in rec.decoded())
+    assert 0 < n < 600
+    assert rec.report.truncated
+    (warning,) = rec.report.warnings("cut.mcap")
+    assert "truncated" in warning and "stopped at offset" in warning
+
+
+def test_corrupted_chunk_is_skipped_with_its_offset(tmp_path):
+    path = _write(tmp_path / "r.mcap")
+    offsets = _chunk_offsets(path)
+    assert len(offsets) > 3
+    data = bytearray(path.read_bytes())
+    target = offsets[1]
+    for k in range(60, 80):  # inside the chunk's compressed records
+        data[target + k] ^= 0xFF
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    rec = open_recording(bad)
+    n = sum(1 for _ in rec.decoded())
+    assert 0 < n < 600
+    assert rec.report.skipped_chunks and rec.report.skipped_chunks[0][0] == target
+    assert any(f"offset {target}" in w for w in rec.report.warnings("bad.mcap"))
+
+
+def test_missing_empty_and_foreign_files_are_refused(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        open_recording(tmp_path / "nope.mcap")
+    (tmp_path / "empty.mcap").write_bytes(b"")
+    with pytest.raises(RecordingError, match="empty"):
+        open_recording(tmp_path / "empty.mcap")
+    (tmp_path / "x.mcap").write_text("hello, this is text")
+    with pytest.raises(RecordingError, match="not an MCAP file"):
+        open_recording(tmp_path / "x.mcap")
+    with pytest.raises(InputError, match="directory"):
+        open_recording(tmp_path)
+
+
+def test_foreign_encodings_are_counted_not_fatal(tmp_path):
+    path = tmp_path / "mixed.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        js = w.register_schema("s", "jsonschema", b"{}")
+        ros = w.register_schema("std_msgs/String", "ros1msg", b"string data")
+        cj = w.register_channel("/json", "json", js)
+        cr = w.register_channel("/ros", "ros1", ros)
+        cb = w.register_channel("/broken", "protobuf", 0)
+        for i in range(5):
+            w.add_message(cj, log_time=i, publish_time=i, data=json.dumps({"i": i}).encode())
+            w.add_message(cr, log_time=i, publish_time=i, data=b"\x01\x00\x00\x00x")
+            w.add_message(cb, log_time=i, publish_time=i, data=b"\x08\x01")
+        w.finish()
+    rec = open_recording(path)
+    decoded = list(rec.decoded())
+    assert [m.message for m in decoded] == [{"i": i} for i in range(5)]
+    stats = rec.report.channel_stats
+    assert stats["/ros"].skipped_encoding == 5
+    assert stats["/broken"].undecodable == 5
+    warnings = " ".join(rec.report.warnings("mixed.mcap"))
+    assert "/ros" in warnings and "/broken" in warnings
+
+
+def test_the_writer_is_atomic(tmp_path):
+    out = tmp_path / "out.mcap"
+    out.write_bytes(b"previous content")
+    with pytest.raises(RuntimeError):
+        with RecordingWriter(out) as w:
+            w.add_channel("/control", control_pb2.ControlCommand)
+            w.write("/control", control_pb2.ControlCommand(), log_time_ns=0)
+            raise RuntimeError("interrupted")
+    assert out.read_bytes() == b"previous content"
+    assert list(tmp_path.iterdir()) == [out]
