@@ -48,7 +48,7 @@ class ChangePointConfig:
 
     baseline_s: float = 3.0
     penalty_scale: float = 3.0
-    noise_floor: float = 0.02
+    noise_floor: float = 0.002
     penalty: float | None = None
     min_size: int = 2
     smooth_bins: int = 5
