@@ -22,12 +22,12 @@ class Env:
     stderr: TextIO = field(default_factory=lambda: sys.stderr)
 
     def out(self) -> Console:
-        """A rich console on stdout (plain text when stdout is not a terminal)."""
-        return Console(file=self.stdout, soft_wrap=True, highlight=False)
+        """A rich console on stdout (plain text, 160 columns, when stdout is not a terminal)."""
+        return Console(file=self.stdout, highlight=False, width=None if _isatty(self.stdout) else 160)
 
     def err(self) -> Console:
         """A rich console on stderr (for progress bars)."""
-        return Console(file=self.stderr, soft_wrap=True, highlight=False)
+        return Console(file=self.stderr, highlight=False, width=None if _isatty(self.stderr) else 160)
 
     def warn(self, message: str) -> None:
         """One ``rocas: warning: ...`` line on stderr."""
@@ -36,3 +36,10 @@ class Env:
     def error(self, message: str) -> None:
         """One ``rocas: error: ...`` line on stderr."""
         print(f"rocas: error: {message}", file=self.stderr, flush=True)
+
+
+def _isatty(stream: TextIO) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
