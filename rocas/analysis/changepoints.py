@@ -30,7 +30,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import ruptures
 
 
 @dataclass(frozen=True)
@@ -109,6 +108,8 @@ def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> C
     values = median_filter(raw, cfg.smooth_bins)
     if len(values) < 2 * cfg.min_size or np.all(values == values[0]):
         return ChangePoints((), (), penalty, std)
+    import ruptures  # imports scipy.stats (~1 s): only when change points are needed
+
     algo = ruptures.KernelCPD(kernel="linear", min_size=cfg.min_size, jump=1)
     ends = algo.fit(values.reshape(-1, 1)).predict(pen=penalty)
     idx = tuple(int(e) for e in ends[:-1])  # the last end is len(values)

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
-from rich.table import Table
-from rich.text import Text
-
-from rocas.analysis.changepoints import ChangePointConfig
-from rocas.analysis.diff import DiffResult, diff
 from rocas.cli.console import Env
+
+if TYPE_CHECKING:
+    from rocas.analysis.changepoints import ChangePointConfig
+    from rocas.analysis.diff import DiffResult
 
 HELP = "diff two recordings channel by channel and find the initial deviating module"
 
@@ -61,6 +61,8 @@ def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def change_point_config(args: argparse.Namespace) -> ChangePointConfig:
+    from rocas.analysis.changepoints import ChangePointConfig
+
     if args.smooth < 1:
         from rocas.errors import UsageError
 
@@ -85,6 +87,9 @@ def _num(x: float | None, fmt: str = ".3f") -> str:
 
 def render(result: DiffResult, env: Env) -> None:
     """The terminal report: Table 3 of the paper, the walk and the verdict."""
+    from rich.table import Table
+    from rich.text import Text
+
     out = env.out()
     p = result.pinpoint
     table = Table(title="Channels (MDR change points)", title_justify="left")
@@ -120,6 +125,8 @@ def render(result: DiffResult, env: Env) -> None:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
+    from rocas.analysis.diff import diff
+
     result = diff(
         args.accident,
         args.reference,
