@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import struct
+import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,13 +33,22 @@ from mcap.exceptions import McapError
 from mcap.opcode import Opcode
 from mcap.reader import make_reader
 from mcap.records import Attachment, Channel, Chunk, Message, Metadata, Schema
-from mcap.stream_reader import breakup_chunk
 
 from rocas.errors import InputError, RecordingError
 from rocas.recording.decoding import DecoderCache
 
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD_HEADER = struct.Struct("<BQ")
+_CHUNK_HEAD = struct.Struct("<QQQII")  # start, end, uncompressed_size, crc, compression length
+#: Largest record body (a chunk as stored, a message, ...) rocas loads into memory [bytes].
+#: A longer one is taken for a corrupted length field; attachments are only read on request.
+MAX_RECORD_BYTES = 512 << 20
+#: Largest uncompressed chunk rocas inflates [bytes]; a larger ``uncompressed_size`` is damage.
+MAX_CHUNK_BYTES = 512 << 20
+#: Opcodes the MCAP specification defines (0x80 and above are user-defined and skipped).
+_SPEC_OPCODES = frozenset(range(0x01, 0x10))
+# a plausible record header: a spec opcode and a length below 4 GiB
+_CANDIDATE = re.compile(rb"[\x01-\x0f].{4}\x00\x00\x00\x00", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
 DECODABLE_ENCODINGS = ("protobuf", "json")
 
@@ -110,7 +121,9 @@ class ReadReport:
     truncated: bool = False
     stop_reason: str | None = None
     skipped_chunks: list[tuple[int, str]] = field(default_factory=list)
+    skipped_ranges: list[tuple[int, int, str]] = field(default_factory=list)
     unknown_channel_messages: int = 0
+    channels_from_summary: bool = False
     channel_stats: dict[str, ChannelStats] = field(default_factory=dict)
 
     def warnings(self, name: str) -> list[str]:
@@ -125,6 +138,16 @@ class ReadReport:
             )
         for offset, reason in self.skipped_chunks:
             out.append(f"{name}: skipped a corrupted chunk at offset {offset} ({reason})")
+        for offset, size, reason in self.skipped_ranges:
+            out.append(
+                f"{name}: skipped {size} bytes of damaged data at offset {offset} ({reason}); "
+                f"reading resumed at offset {offset + size}"
+            )
+        if self.channels_from_summary:
+            out.append(
+                f"{name}: channel declarations were lost with damaged data; "
+                "recovered them from the file's summary section"
+            )
         if self.unknown_channel_messages:
             out.append(
                 f"{name}: {self.unknown_channel_messages} messages reference channels "
@@ -187,6 +210,7 @@ class Recording:
         self._decoders: dict[int, Callable[[bytes], Any] | None] = {}
         self._decoder_cache = decoders if decoders is not None else DecoderCache()
         self._scanned = False
+        self._summary_channels_tried = False
 
     # -- records -----------------------------------------------------------------------
     def _channel_info(self, ch: Channel) -> ChannelInfo:
@@ -235,43 +259,104 @@ class Recording:
 
     def _walk(self, want_attachments: bool) -> Iterator[Message | Attachment]:
         with open(self.path, "rb", buffering=1 << 20) as f:
-            f.seek(len(MAGIC))
             pos = len(MAGIC)
             while True:
+                f.seek(pos)
                 head = f.read(_RECORD_HEADER.size)
                 if len(head) < _RECORD_HEADER.size:
                     self._stop(pos, "the file ends without a footer", truncated=True)
                     return
                 opcode, length = _RECORD_HEADER.unpack(head)
                 body_start = pos + _RECORD_HEADER.size
-                if length > self.size - body_start:
-                    self._stop(
-                        pos,
-                        f"record at offset {pos} claims {length} bytes but only "
-                        f"{self.size - body_start} remain",
-                        truncated=True,
-                    )
-                    return
+                end = body_start + length
+                problem = self._header_problem(f, pos, opcode, length)
+                if problem is not None:
+                    # the length (or opcode) cannot be trusted: find the next record instead
+                    nxt = self._resync(f, pos + 1)
+                    if nxt is None:
+                        self._stop(pos, problem, truncated=True)
+                        return
+                    self.report.skipped_ranges.append((pos, nxt - pos, problem))
+                    pos = nxt
+                    continue
                 if opcode in (Opcode.DATA_END, Opcode.FOOTER):
                     self.report.bytes_read = self.size
                     self.report.complete = True
                     self._scanned = not want_attachments
                     return
-                if opcode in _SKIPPED_OPCODES or (
-                    opcode == Opcode.ATTACHMENT and not want_attachments
+                if (
+                    opcode in _SKIPPED_OPCODES
+                    or opcode not in _SPEC_OPCODES
+                    or (opcode == Opcode.ATTACHMENT and not want_attachments)
                 ):
-                    f.seek(length, io.SEEK_CUR)
-                    pos = body_start + length
+                    pos = end
                     self.report.bytes_read = pos
                     continue
+                f.seek(body_start)
                 body = f.read(length)
-                pos = body_start + length
                 try:
-                    yield from self._handle_record(opcode, body, body_start - _RECORD_HEADER.size)
+                    yield from self._handle_record(opcode, body, pos)
                 except _BadRecord as exc:
-                    self._stop(exc.offset, exc.reason, truncated=True)
-                    return
+                    if opcode == Opcode.CHUNK:
+                        self.report.skipped_chunks.append((pos, exc.reason))
+                    if not self._plausible(f, end, depth=1):
+                        nxt = self._resync(f, pos + 1)
+                        if nxt is None:
+                            self._stop(pos, exc.reason, truncated=True)
+                            return
+                        end = nxt
+                    if opcode != Opcode.CHUNK:
+                        self.report.skipped_ranges.append((pos, end - pos, exc.reason))
+                pos = end
                 self.report.bytes_read = pos
+
+    def _header_problem(self, f: io.BufferedReader, pos: int, opcode: int, length: int) -> str | None:
+        """Why the record header at ``pos`` cannot be trusted, or None."""
+        remain = self.size - pos - _RECORD_HEADER.size
+        if length > remain:
+            return f"record at offset {pos} claims {length} bytes but only {remain} remain"
+        if opcode == 0 or 0x10 <= opcode < 0x80:
+            return f"invalid record opcode {opcode:#04x} at offset {pos}"
+        if opcode in _LOADED_OPCODES and length > MAX_RECORD_BYTES:
+            return (
+                f"record at offset {pos} claims {length} bytes, more than rocas loads "
+                f"({MAX_RECORD_BYTES >> 20} MiB)"
+            )
+        if opcode == Opcode.CHUNK and not _chunk_header_ok(_peek(f, pos, 64), length):
+            return f"chunk at offset {pos} has inconsistent length fields"
+        return None
+
+    def _plausible(self, f: io.BufferedReader, pos: int, depth: int = 2) -> bool:
+        """Whether a record (and the ``depth`` records after it) could start at ``pos``."""
+        for _ in range(depth + 1):
+            if pos == self.size or (pos == self.size - len(MAGIC) and _peek(f, pos, 8) == MAGIC):
+                return True
+            head = _peek(f, pos, 64)
+            if len(head) < _RECORD_HEADER.size:
+                return False
+            opcode, length = _RECORD_HEADER.unpack_from(head)
+            if opcode not in _SPEC_OPCODES or length > self.size - pos - _RECORD_HEADER.size:
+                return False
+            if opcode == Opcode.CHUNK:
+                return _chunk_header_ok(head, length)
+            if opcode == Opcode.FOOTER and pos + _RECORD_HEADER.size + length != self.size - 8:
+                return False
+            pos += _RECORD_HEADER.size + length
+        return True
+
+    def _resync(self, f: io.BufferedReader, start: int) -> int | None:
+        """Offset of the next plausible record at or after ``start``, or None."""
+        block = 4 << 20
+        base = start
+        while base < self.size:
+            data = _peek(f, base, block + 16)
+            for m in _CANDIDATE.finditer(data):
+                if m.start() >= block:
+                    break
+                if self._plausible(f, base + m.start()):
+                    return base + m.start()
+            base += block
+        return None
 
     def _stop(self, offset: int, reason: str, truncated: bool) -> None:
         self.report.bytes_read = offset
@@ -283,11 +368,9 @@ class Recording:
         stream = ReadDataStream(io.BytesIO(body))
         if opcode == Opcode.CHUNK:
             try:
-                chunk = Chunk.read(stream)
-                records = breakup_chunk(chunk, validate_crc=True)
+                records = _chunk_records(Chunk.read(stream))
             except Exception as exc:  # any parse failure inside one chunk: skip the chunk
-                self.report.skipped_chunks.append((offset, _describe(exc)))
-                return
+                raise _BadRecord(offset, _describe(exc)) from exc
             for rec in records:
                 if isinstance(rec, Schema):
                     self._register_schema(rec)
@@ -298,20 +381,25 @@ class Recording:
             return
         try:
             if opcode == Opcode.MESSAGE:
-                yield Message.read(stream, len(body))
+                rec: Any = Message.read(stream, len(body))
             elif opcode == Opcode.SCHEMA:
                 self._register_schema(Schema.read(stream))
+                return
             elif opcode == Opcode.CHANNEL:
                 self._register_channel(Channel.read(stream))
+                return
             elif opcode == Opcode.METADATA:
                 md = Metadata.read(stream)
                 self._metadata.append((md.name, dict(md.metadata)))
+                return
             elif opcode == Opcode.ATTACHMENT:
-                yield Attachment.read(stream)
-            # other opcodes (header, indexes, unknown) carry nothing we need
+                rec = Attachment.read(stream)
+            else:
+                return  # other opcodes (header, indexes, unknown) carry nothing we need
         except (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError) as exc:
             reason = f"unreadable record at offset {offset}: {_describe(exc)}"
             raise _BadRecord(offset, reason) from exc
+        yield rec
 
     # -- public passes ------------------------------------------------------------------
     def messages(self) -> Iterator[RawMessage]:
@@ -321,6 +409,9 @@ class Recording:
         for rec in self._records():
             assert isinstance(rec, Message)
             ch = self.channels.get(rec.channel_id)
+            if ch is None and not self._summary_channels_tried:
+                self._channels_from_summary()
+                ch = self.channels.get(rec.channel_id)
             if ch is None:
                 self.report.unknown_channel_messages += 1
                 continue
@@ -357,6 +448,28 @@ class Recording:
             for _ in self.messages():
                 pass
         return self
+
+    def _channels_from_summary(self) -> None:
+        """Declare the channels (and schemas) the summary section repeats.
+
+        Called when a message names a channel not seen yet, typically because the chunk that
+        declared it was damaged: a complete file repeats every declaration in its summary.
+        """
+        self._summary_channels_tried = True
+        try:
+            with open(self.path, "rb") as f:
+                summary = make_reader(f).get_summary()
+        except Exception:  # no or damaged summary: the messages stay unattributed
+            return
+        if summary is None:
+            return
+        for schema in summary.schemas.values():
+            if schema.id not in self._schemas:
+                self._register_schema(schema)
+        for ch in summary.channels.values():
+            if ch.id not in self.channels:
+                self._register_channel(ch)
+        self.report.channels_from_summary = True
 
     def summary_start_time_ns(self) -> int | None:
         """Earliest message log time from the file's summary statistics, if it has them.
@@ -418,6 +531,93 @@ _SKIPPED_OPCODES = frozenset(
         Opcode.SUMMARY_OFFSET,
     }
 )
+
+
+_LOADED_OPCODES = frozenset(
+    {Opcode.CHUNK, Opcode.MESSAGE, Opcode.SCHEMA, Opcode.CHANNEL, Opcode.METADATA}
+)
+
+
+def _peek(f: io.BufferedReader, offset: int, n: int) -> bytes:
+    f.seek(offset)
+    return f.read(n)
+
+
+def _chunk_header_ok(head: bytes, length: int) -> bool:
+    """Whether a chunk's record length agrees with the lengths inside its header."""
+    body = head[_RECORD_HEADER.size :]
+    if len(body) < _CHUNK_HEAD.size:
+        return False
+    start, end, _, _, clen = _CHUNK_HEAD.unpack_from(body)
+    if clen > 16 or start > end or len(body) < _CHUNK_HEAD.size + clen + 8:
+        return False
+    (records_length,) = struct.unpack_from("<Q", body, _CHUNK_HEAD.size + clen)
+    return records_length == length - (_CHUNK_HEAD.size + clen + 8)
+
+
+def _inflate(chunk: Chunk) -> bytes:
+    """The chunk's records, decompressed without trusting its size fields for allocation."""
+    size = chunk.uncompressed_size
+    if size > MAX_CHUNK_BYTES:
+        raise ValueError(
+            f"chunk claims {size} bytes uncompressed, more than rocas inflates "
+            f"({MAX_CHUNK_BYTES >> 20} MiB)"
+        )
+    if chunk.compression == "":
+        data = bytes(chunk.data)
+    elif chunk.compression == "zstd":
+        import zstandard
+
+        reader = zstandard.ZstdDecompressor().stream_reader(
+            io.BytesIO(chunk.data), read_across_frames=True
+        )
+        parts, got = [], 0
+        while got <= size:  # read in pieces: a lying frame header must not size a buffer
+            piece = reader.read(min(4 << 20, size + 1 - got))
+            if not piece:
+                break
+            parts.append(piece)
+            got += len(piece)
+        data = b"".join(parts)
+    elif chunk.compression == "lz4":
+        import lz4.frame
+
+        data = lz4.frame.LZ4FrameDecompressor().decompress(chunk.data, max_length=size + 1)
+    else:
+        raise ValueError(f"unsupported chunk compression {chunk.compression!r}")
+    if len(data) != size:
+        raise ValueError(f"chunk inflates to {len(data)} bytes, its header says {size}")
+    if chunk.uncompressed_crc != 0 and zlib.crc32(data) != chunk.uncompressed_crc:
+        raise ValueError(
+            f"CRC mismatch (expected {chunk.uncompressed_crc:#010x}, "
+            f"computed {zlib.crc32(data):#010x})"
+        )
+    return data
+
+
+def _chunk_records(chunk: Chunk) -> list[Schema | Channel | Message]:
+    """Schema, channel and message records inside a chunk; raises on any damage."""
+    data = _inflate(chunk)
+    view = memoryview(data)
+    out: list[Schema | Channel | Message] = []
+    pos, n = 0, len(data)
+    while pos < n:
+        if n - pos < _RECORD_HEADER.size:
+            raise ValueError(f"a record header is cut off at byte {pos} of the chunk")
+        opcode, length = _RECORD_HEADER.unpack_from(data, pos)
+        start = pos + _RECORD_HEADER.size
+        if length > n - start:
+            raise ValueError(f"inner record at byte {pos} claims {length} bytes, "
+                             f"{n - start} remain in the chunk")
+        stream = ReadDataStream(io.BytesIO(view[start : start + length]))
+        if opcode == Opcode.MESSAGE:
+            out.append(Message.read(stream, length))
+        elif opcode == Opcode.CHANNEL:
+            out.append(Channel.read(stream))
+        elif opcode == Opcode.SCHEMA:
+            out.append(Schema.read(stream))
+        pos = start + length
+    return out
 
 
 class _BadRecord(Exception):
