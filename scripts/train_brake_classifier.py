@@ -20,7 +20,7 @@ from rocas.ads.classifier import CAMERA_HFOV_RAD, FEATURES, camera_view, mlp_for
 from rocas.scenarios.model import COLORS
 
 OUT = Path(__file__).resolve().parents[1] / "rocas" / "ads" / "brake_classifier.npz"
-HIDDEN = 16
+HIDDEN = 32
 
 
 def synthesize(rng: np.random.Generator, n: int, objects: int = 4
@@ -42,14 +42,14 @@ def synthesize(rng: np.random.Generator, n: int, objects: int = 4
     fog = rng.uniform(0.0, 100.0, n) * (rng.random(n) < 0.4)
     glare = rng.uniform(0.0, 0.3, n) * (rng.random(n) < 0.2)
     x = camera_view(bearing, dist, width / 2, height, rgb, visible, fog, glare)
-    in_corridor = (np.abs(lateral) < 1.6 + width / 2) & (visible > 0)
+    in_corridor = (np.abs(lateral) < 1.0 + width / 2) & (visible > 0)
     is_red = color_idx == names.index("red")
-    label = (in_corridor & (dist < 10.0)) | (in_corridor & is_red & (dist < 30.0)) | (
-        is_red & (visible > 0) & (np.abs(lateral) < 4.5) & (dist < 22.0))
+    label = (in_corridor & (dist < 9.0)) | (
+        is_red & (visible > 0) & (np.abs(lateral) < 3.0) & (dist < 25.0))
     return x, label.any(axis=1).astype(np.float64)
 
 
-def train(seed: int, samples: int = 40_000, epochs: int = 60, lr: float = 0.01
+def train(seed: int, samples: int = 40_000, epochs: int = 80, lr: float = 0.01
           ) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
     x, y = synthesize(rng, samples)
@@ -85,7 +85,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--samples", type=int, default=40_000)
-    parser.add_argument("--epochs", type=int, default=60)
+    parser.add_argument("--epochs", type=int, default=80)
     parser.add_argument("-o", "--output", type=Path, default=OUT)
     args = parser.parse_args()
     w = train(args.seed, args.samples, args.epochs)

@@ -16,6 +16,8 @@ from io import BytesIO
 
 import numpy as np
 
+from rocas.sim.geometry import clip
+
 CAMERA_COLUMNS = 16
 CAMERA_HFOV_RAD = np.deg2rad(60.0)
 CHANNELS = 4  # apparent size, r, g, b
@@ -49,7 +51,7 @@ def camera_view(
     d = np.maximum(dist, 0.5)
     half_angle = np.arctan2(lat_extent, d)
     contrast = np.exp(-(fog[:, None] / 100.0) * d / FOG_CONTRAST_LENGTH_M) * visible
-    size = np.clip(height / d * 3.0, 0.0, 1.0) * contrast  # (N, M)
+    size = clip(height / d * 3.0, 0.0, 1.0) * contrast  # (N, M)
     covers = np.abs(bearing[..., None] - COLUMN_CENTERS) <= half_angle[..., None] \
         + COLUMN_HALF_WIDTH  # (N, M, C)
     value = np.where(covers, size[..., None], 0.0)
@@ -61,15 +63,17 @@ def camera_view(
         best = np.argmax(value, axis=1)  # (N, C) nearest-looking object per column
         col_size = np.take_along_axis(value, best[:, None, :], 1)[:, 0, :]
         col_rgb = np.take_along_axis(rgb, best[..., None], 1) * col_size[..., None]
-    col_rgb = np.clip(col_rgb + glare[:, None, None], 0.0, 1.0)
+    col_rgb = clip(col_rgb + glare[:, None, None], 0.0, 1.0)
     return np.concatenate([col_size[..., None], col_rgb], axis=-1).reshape(n, FEATURES)
 
 
 def mlp_forward(weights: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
     """Brake probability (N,) from features (N, FEATURES)."""
-    h = np.tanh(x @ weights["w1"] + weights["b1"])
-    z = h @ weights["w2"] + weights["b2"]
-    return 1.0 / (1.0 + np.exp(-z[..., 0]))
+    # row-wise products (a stack of (1, F) @ (F, H) matmuls): each variant's result is computed
+    # by the same kernel whatever the batch size, so it is bit-identical across batch sizes
+    h = np.tanh(np.matmul(x[:, None, :], weights["w1"])[:, 0, :] + weights["b1"])
+    z = np.matmul(h[:, None, :], weights["w2"])[:, 0, 0] + weights["b2"][0]
+    return 1.0 / (1.0 + np.exp(-z))
 
 
 @functools.cache

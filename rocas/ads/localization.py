@@ -9,7 +9,7 @@ import numpy as np
 from rocas.scenarios.model import EGO_WHEELBASE_M
 from rocas.sim import rng
 from rocas.sim.dynamics import VehicleState
-from rocas.sim.geometry import wrap_angle
+from rocas.sim.geometry import clip, wrap_angle
 from rocas.sim.world import BatchWorld, project_on_reference
 
 _STREAM_LOC = 10
@@ -121,8 +121,8 @@ class Canbus:
         target = throttle / 100.0 * self.max_accel - brake / 100.0 * self.max_decel
         k = 1.0 - np.exp(-dt / self.tau)
         self.accel = self.accel + (target - self.accel) * k
-        target_angle = np.clip(steering_pct, -100.0, 100.0) / 100.0 * self.max_steer
-        step = np.clip((target_angle - self.wheel_angle) * k, -self.steer_rate * dt,
+        target_angle = clip(steering_pct, -100.0, 100.0) / 100.0 * self.max_steer
+        step = clip((target_angle - self.wheel_angle) * k, -self.steer_rate * dt,
                        self.steer_rate * dt)
         self.wheel_angle = self.wheel_angle + step
         return self.accel, np.tan(self.wheel_angle) / EGO_WHEELBASE_M

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rocas.sim.geometry import wrap_angle
+from rocas.sim.geometry import clip, wrap_angle
 
 GRAVITY_MPS2 = 9.81
 #: Share of the friction circle heavy vehicles can use laterally before they slide
@@ -60,16 +60,16 @@ def bicycle_step(
     departs from its path tangent.
     """
     mu_g = friction * GRAVITY_MPS2
-    a = np.clip(accel, -mu_g, mu_g)
+    a = clip(accel, -mu_g, mu_g)
     v_next = np.maximum(state.speed + a * dt, 0.0)
     realised = (v_next - state.speed) / dt
     v_mid = 0.5 * (state.speed + v_next)
     kappa_max = mu_g * grip_factor / np.maximum(v_mid * v_mid, 1e-6)
-    kappa_eff = np.clip(curvature, -kappa_max, kappa_max)
+    kappa_eff = clip(curvature, -kappa_max, kappa_max)
     sliding = np.abs(curvature) > kappa_max
     course = state.course + v_mid * kappa_eff * dt
     slip = wrap_angle(state.yaw - state.course) + v_mid * (curvature - kappa_eff) * dt
-    slip = np.where(sliding, np.clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
+    slip = np.where(sliding, clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
                     slip * np.exp(-dt / SLIP_RELAX_S))
     mid_course = 0.5 * (state.course + course)
     x = state.x + v_mid * np.cos(mid_course) * dt
@@ -83,24 +83,26 @@ def profile_speed(t: float, knots_t: np.ndarray, knots_v: np.ndarray) -> np.ndar
     k = knots_t.shape[-1]
     if k == 1:
         return knots_v[..., 0]
-    idx = np.clip((knots_t <= t).sum(-1) - 1, 0, k - 2)
-    t0 = np.take_along_axis(knots_t, idx[..., None], -1)[..., 0]
-    t1 = np.take_along_axis(knots_t, idx[..., None] + 1, -1)[..., 0]
-    v0 = np.take_along_axis(knots_v, idx[..., None], -1)[..., 0]
-    v1 = np.take_along_axis(knots_v, idx[..., None] + 1, -1)[..., 0]
-    u = np.clip((t - t0) / np.maximum(t1 - t0, 1e-9), 0.0, 1.0)
-    return v0 + u * (v1 - v0)
+    kt = knots_t.reshape(-1, k)
+    kv = knots_v.reshape(-1, k)
+    idx = clip((kt <= t).sum(-1) - 1, 0, k - 2)
+    r = np.arange(kt.shape[0])
+    t0, t1, v0, v1 = kt[r, idx], kt[r, idx + 1], kv[r, idx], kv[r, idx + 1]
+    u = clip((t - t0) / np.maximum(t1 - t0, 1e-9), 0.0, 1.0)
+    return (v0 + u * (v1 - v0)).reshape(knots_t.shape[:-1])
 
 
 def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Interpolate equally spaced paths (..., P, 2) at arc length s (...) -> x, y, heading."""
+    """Interpolate equally spaced paths (N, A, P, 2) at arc length s (N, A) -> x, y, heading."""
     p = path.shape[-2]
-    f = np.clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
+    f = clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    i0 = i[..., None, None]
-    a = np.take_along_axis(path, np.broadcast_to(i0, (*i.shape, 1, 2)), -2)[..., 0, :]
-    b = np.take_along_axis(path, np.broadcast_to(i0 + 1, (*i.shape, 1, 2)), -2)[..., 0, :]
-    h = np.take_along_axis(heading, i[..., None], -1)[..., 0]
-    return a[..., 0] + u * (b[..., 0] - a[..., 0]), a[..., 1] + u * (b[..., 1] - a[..., 1]), h
+    n, a = s.shape
+    rn = np.arange(n)[:, None]
+    ra = np.arange(a)[None, :]
+    p0 = path[rn, ra, i]
+    p1 = path[rn, ra, i + 1]
+    return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
+            heading[rn, ra, i])

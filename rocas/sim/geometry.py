@@ -5,6 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 
+def clip(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float) -> np.ndarray:
+    """``np.clip`` without its Python-level overhead (hot loops call it thousands of times)."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
 def wrap_angle(a: np.ndarray | float) -> np.ndarray:
     """Angles wrapped to [-pi, pi)."""
     return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
@@ -163,6 +168,9 @@ def nearest_on(points: np.ndarray, grid: NearestGrid, x: np.ndarray, y: np.ndarr
     px = points[cand, 0]
     py = points[cand, 1]
     d2 = (px - x[..., None]) ** 2 + (py - y[..., None]) ** 2
-    j = np.argmin(d2, axis=-1)
-    return (np.take_along_axis(cand, j[..., None], -1)[..., 0],
-            np.take_along_axis(d2, j[..., None], -1)[..., 0])
+    k = cand.shape[-1]
+    c2 = cand.reshape(-1, k)
+    d22 = d2.reshape(-1, k)
+    j = np.argmin(d22, axis=1)
+    r = np.arange(c2.shape[0])
+    return c2[r, j].reshape(cand.shape[:-1]), d22[r, j].reshape(cand.shape[:-1])

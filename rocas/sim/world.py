@@ -23,7 +23,7 @@ from rocas.scenarios.model import (
     Lane,
     Scenario,
 )
-from rocas.sim.geometry import NearestGrid, polyline_curvature, polyline_headings, resample_polyline
+from rocas.sim.geometry import NearestGrid, clip, polyline_curvature, polyline_headings, resample_polyline
 
 #: Actor kind codes used in arrays.
 KIND_VEHICLE, KIND_CYCLIST, KIND_PEDESTRIAN, KIND_CONE, KIND_BOX = 0, 1, 2, 3, 4
@@ -111,7 +111,7 @@ class RoadGeometry:
     destination_s_m: float
 
     def ref_index(self, s: np.ndarray) -> np.ndarray:
-        return np.clip((s / REF_SPACING_M).astype(np.int64), 0, self.ref_points.shape[0] - 1)
+        return clip((s / REF_SPACING_M).astype(np.int64), 0, self.ref_points.shape[0] - 1)
 
 
 @functools.lru_cache(maxsize=16)
@@ -167,7 +167,7 @@ def road_geometry(lanes: tuple[Lane, ...], route: tuple[str, ...], start_s_m: fl
     ref_heading = polyline_headings(ref)
     ref_kappa = polyline_curvature(ref, REF_SPACING_M)
     bounds = np.cumsum([0.0] + [_length(_polyline(by_id[r].centerline)) for r in route])
-    lane_idx = np.clip(np.searchsorted(bounds, rs, side="right") - 1, 0, len(route) - 1)
+    lane_idx = clip(np.searchsorted(bounds, rs, side="right") - 1, 0, len(route) - 1)
     ref_limit = np.array([by_id[route[i]].speed_limit_mps for i in lane_idx])
     ref_junction = np.array([by_id[route[i]].is_junction for i in lane_idx])
     ref_lane = np.array([code[route[i]] for i in lane_idx])
@@ -408,7 +408,7 @@ def light_state(world: BatchWorld, t: float) -> np.ndarray:
 
 def road_friction(precipitation: np.ndarray) -> np.ndarray:
     """Tyre-road friction coefficient from precipitation in [0, 100]: 0.9 dry, 0.4 soaked."""
-    return 0.9 - 0.5 * np.clip(precipitation, 0.0, 100.0) / 100.0
+    return 0.9 - 0.5 * clip(precipitation, 0.0, 100.0) / 100.0
 
 
 def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
@@ -434,7 +434,7 @@ def reference_at(road: RoadGeometry, s: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Interpolate the reference line at arc lengths s (any shape): x, y, heading, curvature."""
     r = road.ref_points.shape[0]
-    f = np.clip(s / REF_SPACING_M, 0.0, r - 1.000001)
+    f = clip(s / REF_SPACING_M, 0.0, r - 1.000001)
     i = f.astype(np.int64)
     u = f - i
     p0 = road.ref_points[i]

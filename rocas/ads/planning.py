@@ -1,0 +1,350 @@
+"""Planning: reference line, path (nudge) and speed (IDM over follow/stop/yield constraints)
+decisions, ST-overlap yield/overtake, traffic lights, perception brake, collision check.
+
+All quantities are along the ego reference line (route s, lateral offset positive left).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.ads.localization import ChassisOutput, LocalizationOutput
+from rocas.ads.perception import (
+    T_BICYCLE,
+    T_PEDESTRIAN,
+    TL_RED,
+    TL_UNKNOWN,
+    TL_YELLOW,
+    PerceptionOutput,
+)
+from rocas.ads.prediction import PredictionOutput
+from rocas.sim.geometry import box_gap, clip, wrap_angle
+from rocas.sim.world import REF_SPACING_M, BatchWorld, project_on_reference, reference_at
+
+MAX_POINTS = 41
+# ObjectDecision.Type
+D_IGNORE, D_FOLLOW, D_YIELD, D_OVERTAKE, D_STOP, D_NUDGE = range(6)
+# MainDecision.Type
+M_CRUISE, M_STOP, M_ESTOP = range(3)
+# ADCTrajectory.EStopReason
+E_NONE, E_COLLISION, E_PERCEPTION_BRAKE, E_NO_PATH = range(4)
+#: Stop/slow-down reasons (main_decision.reason); the oracles read them.
+REASONS = ("cruise", "destination", "traffic_light", "follow", "yield", "blocked_by_static",
+           "vulnerable_road_user", "perception_brake", "collision_imminent", "collision_fallback")
+R_CRUISE, R_DEST, R_LIGHT, R_FOLLOW, R_YIELD, R_BLOCKED, R_VRU, R_PBRAKE, R_COLL, R_FALLBACK = (
+    range(10))
+ACCEL_DECAY_S = 1.0  # [s] planned accelerations fade with this time constant
+
+
+@dataclass(frozen=True, eq=False)
+class PlanningOutput:
+    """The planned trajectory and decisions.
+
+    Attributes:
+        x, y [m], theta [rad], kappa [1/m], s [m along the route], v [m/s], a [m/s^2],
+            t [s]: (N, K) trajectory points; valid: (N, K) bool.
+        decision: (N, M) ObjectDecision type per obstacle slot; decision_s: (N, M) [m];
+        nudge_offset: (N,) lateral offset of the nudge [m].
+        main: (N,) MainDecision type; stop_distance: (N,) [m]; reason: (N,) index into REASONS.
+        estop: (N,) bool; estop_reason: (N,) code; cruise_speed: (N,) [m/s];
+        lane: (N,) lane code of the reference at the ego; total_length: (N,) [m].
+        track_id: (N, M) ids the decisions refer to.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    kappa: np.ndarray
+    s: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    t: np.ndarray
+    valid: np.ndarray
+    decision: np.ndarray
+    decision_s: np.ndarray
+    nudge_offset: np.ndarray
+    main: np.ndarray
+    stop_distance: np.ndarray
+    reason: np.ndarray
+    estop: np.ndarray
+    estop_reason: np.ndarray
+    cruise_speed: np.ndarray
+    lane: np.ndarray
+    total_length: np.ndarray
+    track_id: np.ndarray
+
+
+class Planning:
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+        self.world = world
+        self.p = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("planning.")}
+        n = world.batch_size
+        m = len(world.actor_ids) + len(world.object_ids)
+        self.prev_decision = np.zeros((n, m), dtype=np.int64)
+        self.prev_track = np.full((n, m), -1, dtype=np.int64)
+        self.ego_hl = float(world.ego_dims[0]) / 2
+        self.ego_hw = float(world.ego_dims[1]) / 2
+
+    def _col(self, name: str) -> np.ndarray:
+        return self.p[name][:, None]
+
+    def step(self, pred: PredictionOutput, per: PerceptionOutput, loc: LocalizationOutput,
+             chassis: ChassisOutput) -> PlanningOutput:
+        p, c = self.p, self._col
+        road = self.world.road
+        n, m = pred.x.shape
+        hl_e, hw_e = self.ego_hl, self.ego_hw
+        _, s0, d0 = project_on_reference(road, loc.x, loc.y)
+        v0 = chassis.speed
+        # --- cruise speed -----------------------------------------------------------------
+        ahead = s0[:, None] + np.arange(0.0, 80.0, 2.0)[None, :]
+        _, _, _, kap = reference_at(road, ahead)
+        in_prev = (ahead - s0[:, None]) <= c("curve_preview_m")
+        kmax = np.max(np.where(in_prev, np.abs(kap), 0.0), axis=1)
+        v_curve = np.sqrt(p["max_lateral_accel_mps2"] / np.maximum(kmax, 1e-4))
+        ii = road.ref_index(ahead)
+        junction_near = np.any(road.ref_junction[ii] & ((ahead - s0[:, None]) < 20.0), axis=1)
+        limit = road.ref_speed_limit[road.ref_index(s0)] * p["speed_limit_factor"]
+        v_cruise = np.minimum.reduce([p["cruise_speed_mps"], limit, v_curve,
+                                      np.where(junction_near, p["junction_speed_mps"], np.inf)])
+        # --- obstacles relative to the reference ------------------------------------------
+        pub = pred.published
+        hl_o, hw_o = pred.length / 2, pred.width / 2
+        vru = (pred.type == T_PEDESTRIAN) | (pred.type == T_BICYCLE)
+        oi, so, lo = project_on_reference(road, pred.x, pred.y)
+        ref_h = road.ref_heading[oi]
+        tangent = p["use_path_tangent_heading"][:, None, None] >= 0.5
+        head_now = np.where(tangent[..., 0], pred.traj_heading[..., 0], pred.heading)
+        rel = head_now - ref_h
+        lat_ext = hw_o * np.abs(np.cos(rel)) + hl_o * np.abs(np.sin(rel))
+        lon_ext = hl_o * np.abs(np.cos(rel)) + hw_o * np.abs(np.sin(rel))
+        buf_vru = np.where(vru, c("vru_lateral_buffer_m"), 0.0)
+        consider = pub & (np.abs(lo) < c("obstacle_consider_lateral_m")) & (
+            so + lon_ext > (s0 - hl_e)[:, None] - c("obstacle_ignore_behind_m"))
+        # --- path: nudge around static obstacles ------------------------------------------
+        static = consider & pred.is_static & (so - lon_ext - s0[:, None] < c("nudge_lookahead_m"))
+        static &= so + lon_ext > (s0 - hl_e)[:, None]
+        half = lat_ext + c("static_obstacle_lateral_buffer_m") + hw_e + buf_vru
+        lo_b, hi_b = lo - half, lo + half
+        cands = np.concatenate([np.zeros((n, 1)), lo_b - 0.01, hi_b + 0.01], axis=1)
+        inside = static[:, None, :] & (cands[:, :, None] > lo_b[:, None, :]) & (
+            cands[:, :, None] < hi_b[:, None, :])
+        feasible = ~inside.any(-1) & (np.abs(cands) <= c("nudge_max_offset_m"))
+        cost = np.where(feasible, np.abs(cands), np.inf)
+        best = np.argmin(cost, axis=1)
+        no_path = ~np.isfinite(cost.min(axis=1))
+        target = np.where(no_path, 0.0, cands[np.arange(n), best])
+        blocking = static & (lo_b < 0.0) & (hi_b > 0.0)
+        any_block = blocking.any(axis=1)
+        first_s = np.min(np.where(blocking, so - lon_ext, np.inf), axis=1)
+        last_s = np.max(np.where(blocking, so + lon_ext, -np.inf), axis=1)
+        target = np.where(any_block, target, 0.0)
+        tr = p["nudge_transition_m"]
+        a0 = np.where(any_block, first_s - hl_e - tr, 0.0)
+        a1 = np.where(any_block, last_s + hl_e + tr, 0.0)
+        conv = p["path_lateral_convergence_m"]
+
+        def offset_at(s: np.ndarray) -> np.ndarray:
+            shape = (n,) + (1,) * (s.ndim - 1)
+            t_, a0_, a1_, tr_ = (v.reshape(shape) for v in (target, a0, a1, tr))
+            ramp = clip((s - a0_) / tr_, 0.0, 1.0) * clip((a1_ - s) / tr_, 0.0, 1.0)
+            base = t_ * ramp
+            r0 = (target * clip((s0 - a0) / tr, 0, 1) * clip((a1 - s0) / tr, 0, 1))
+            fade = clip(1.0 - (s - s0.reshape(shape)) / conv.reshape(shape), 0.0, 1.0)
+            return base + (d0 - r0).reshape(shape) * fade
+
+        # --- moving obstacles: follow, VRU stop, ST overlap -> yield / overtake -------------
+        d_obs = offset_at(so)
+        in_path_now = consider & (np.abs(lo - d_obs) < hw_e + lat_ext
+                                  + c("lateral_safety_buffer_m") + buf_vru) & (
+            so - lon_ext > s0[:, None])
+        dir_rel = np.abs(wrap_angle(np.arctan2(pred.vy, pred.vx) - ref_h))
+        aligned = dir_rel < np.pi / 4
+        moving_vru = vru & ~pred.is_static
+        follow = in_path_now & ~pred.is_static & (aligned | moving_vru)
+        vru_stop = in_path_now & vru & pred.is_static
+        # trajectories
+        _, sk, lk = project_on_reference(road, pred.traj_x, pred.traj_y)
+        ref_hk = road.ref_heading[road.ref_index(sk)]
+        head_k = np.where(tangent, pred.traj_heading, pred.heading[..., None])
+        rel_k = head_k - ref_hk
+        lat_k = hw_o[..., None] * np.abs(np.cos(rel_k)) + hl_o[..., None] * np.abs(np.sin(rel_k))
+        lon_k = hl_o[..., None] * np.abs(np.cos(rel_k)) + hw_o[..., None] * np.abs(np.sin(rel_k))
+        tk = pred.traj_t[:, None, :]
+        mov = consider & ~pred.is_static
+        over = (mov[..., None] & pred.traj_valid[:, None, :]
+                & (tk <= p["overlap_check_horizon_s"][:, None, None])
+                & (np.abs(lk - offset_at(sk)) < hw_e + lat_k + c("lateral_safety_buffer_m")[..., None]
+                   + buf_vru[..., None])
+                & (sk + lon_k > (s0 - hl_e)[:, None, None]))
+        any_over = over.any(-1)
+        k_in = np.argmax(over, axis=-1)
+        t_in = np.take_along_axis(pred.traj_t, k_in, axis=1)
+        s_lo = np.min(np.where(over, sk - lon_k, np.inf), -1) - c("st_longitudinal_buffer_m")
+        s_hi = np.max(np.where(over, sk + lon_k, -np.inf), -1) + c("st_longitudinal_buffer_m")
+        cross = any_over & ~follow & ~vru_stop
+        t_pass = (s_hi + c("min_overtake_distance_m") - (s0 - hl_e)[:, None]) / np.maximum(
+            v0, 1.0)[:, None]
+        same = self.prev_track == pred.track_id
+        was_yield = same & (self.prev_decision == D_YIELD)
+        need = c("overtake_time_buffer_s") + np.where(was_yield, c("decision_hysteresis_s"), 0.0)
+        overtake = cross & (t_in - t_pass > need)
+        yield_ = cross & ~overtake & (s_lo > (s0 + hl_e)[:, None])
+        # --- constraints -> IDM ---------------------------------------------------------------
+        inf = np.inf
+        gap_follow = np.where(follow, so - lon_ext - (s0 + hl_e)[:, None], inf)
+        v_lead = np.maximum(pred.speed * np.cos(np.minimum(dir_rel, np.pi / 2)), 0.0)
+        stop_yield = np.where(yield_, s_lo - c("yield_distance_m") - hl_e, inf)
+        stop_vru = np.where(vru_stop, so - lon_ext - c("pedestrian_stop_buffer_m") - hl_e, inf)
+        stop_block = np.where(no_path & any_block,
+                              first_s - hl_e - p["stop_distance_obstacle_m"], inf)
+        # traffic light
+        sel = per.tl_selected
+        has = sel >= 0
+        selc = clip(sel, 0, max(per.tl_color.shape[1] - 1, 0))
+        if per.tl_color.shape[1]:
+            col = np.take_along_axis(per.tl_color, selc[:, None], 1)[:, 0]
+            dist = np.take_along_axis(per.tl_distance, selc[:, None], 1)[:, 0]
+        else:
+            col = np.zeros(n, dtype=np.int64)
+            dist = np.full(n, inf)
+        room = dist - p["stop_line_buffer_m"] - hl_e
+        req = v0 * v0 / (2.0 * np.maximum(room, 0.1))
+        stop_for_light = has & (dist <= p["tl_consider_distance_m"]) & (room > -0.5) & (
+            (col == TL_RED) | ((col == TL_YELLOW) & (req <= p["yellow_stop_max_decel_mps2"]))
+            | ((col == TL_UNKNOWN) & (p["unknown_light_as_red"] >= 0.5)))
+        stop_light = np.where(stop_for_light, s0 + room, inf)
+        stop_dest = np.full(n, road.destination_s_m - p["destination_buffer_m"] - hl_e)
+        stops = np.concatenate([stop_yield, stop_vru, stop_block[:, None], stop_light[:, None],
+                                stop_dest[:, None]], axis=1)
+        stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
+                                      np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
+                                      np.full((n, 1), R_DEST)], axis=1)
+        gaps = np.concatenate([gap_follow, stops - s0[:, None]], axis=1)
+        leads = np.concatenate([v_lead, np.zeros_like(stops)], axis=1)
+        smin = np.concatenate([np.broadcast_to(c("follow_distance_m"), (n, m)),
+                               np.broadcast_to(c("stop_decision_min_distance_m"), stops.shape)],
+                              axis=1)
+        reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
+        amax, bcomf = p["max_accel_mps2"], p["comfort_decel_mps2"]
+        a_free = amax * (1.0 - (v0 / np.maximum(v_cruise, 0.1)) ** p["idm_exponent"])
+        sstar = smin + np.maximum(0.0, v0[:, None] * c("follow_time_headway_s") + v0[:, None]
+                                  * (v0[:, None] - leads) / (2.0 * np.sqrt(amax * bcomf))[:, None])
+        active = np.isfinite(gaps)
+        a_c = np.where(active, a_free[:, None] - amax[:, None] * (
+            sstar / np.maximum(np.where(active, gaps, 1.0), 0.1)) ** 2, inf)
+        binding = np.argmin(a_c, axis=1)
+        a_cmd = np.minimum(a_free, a_c.min(axis=1))
+        a_cmd = clip(a_cmd, -p["max_decel_mps2"], amax)
+        bound = np.isfinite(a_c.min(axis=1)) & (a_c.min(axis=1) < a_free)
+        reason = np.where(bound, reasons[np.arange(n), binding], R_CRUISE)
+        bind_gap = np.where(bound, gaps[np.arange(n), binding], inf)
+        estop = np.zeros(n, dtype=bool)
+        estop_reason = np.zeros(n, dtype=np.int64)
+        pbrake = per.brake & (p["perception_brake_enabled"] >= 0.5)
+        a_cmd = np.where(pbrake, np.minimum(a_cmd, -p["perception_brake_decel_mps2"]), a_cmd)
+        estop |= pbrake
+        estop_reason = np.where(pbrake, E_PERCEPTION_BRAKE, estop_reason)
+        reason = np.where(pbrake, R_PBRAKE, reason)
+        # --- trajectory and collision check ---------------------------------------------------
+        k = np.arange(MAX_POINTS)
+        t = k[None, :] * p["trajectory_time_step_s"][:, None]
+        valid = t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        vcap = np.maximum(v_cruise, v0)
+        traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
+        # collision check at the forecast times (and now): ego trajectory vs obstacles
+        tp = np.concatenate([np.zeros((n, 1)), pred.traj_t], axis=1)  # (N, Kp + 1)
+        tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
+            tp <= c("collision_check_horizon_s")) & (tp <= p["trajectory_horizon_s"][:, None])
+        ex, ey, eh, es = self._sample(traj, t, tp)
+        ox = np.concatenate([pred.x[..., None], pred.traj_x], axis=-1)
+        oy = np.concatenate([pred.y[..., None], pred.traj_y], axis=-1)
+        oh = np.where(tangent, np.concatenate([head_now[..., None], pred.traj_heading], -1),
+                      pred.heading[..., None])
+        gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
+                      ox, oy, oh, hl_o[..., None], hw_o[..., None])
+        thr = np.where(pred.is_static, c("collision_check_static_m"),
+                       c("collision_check_moving_m"))
+        hit = pub[..., None] & tcheck[:, None, :] & (gap < thr[..., None])
+        hit_k = hit.any(axis=1)
+        collide = hit_k.any(axis=1)
+        k_hit = np.argmax(hit_k, axis=1)
+        t_hit = tp[np.arange(n), k_hit]
+        s_hit = es[np.arange(n), k_hit]
+        imminent = collide & (t_hit < p["estop_ttc_s"])
+        fallback = collide & ~imminent
+        a_fb = -v0 * v0 / (2.0 * np.maximum(s_hit - s0 - 1.0, 0.3))
+        a_new = np.where(imminent, -p["emergency_decel_mps2"],
+                         np.where(fallback, np.maximum(np.minimum(a_cmd, a_fb),
+                                                       -p["max_decel_mps2"]), a_cmd))
+        estop |= imminent
+        estop_reason = np.where(imminent & ~pbrake, E_COLLISION, estop_reason)
+        reason = np.where(imminent & ~pbrake, R_COLL, np.where(fallback & ~pbrake & (
+            a_fb < a_cmd), R_FALLBACK, reason))
+        if collide.any():
+            a_cmd = a_new
+            traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
+        # --- decisions --------------------------------------------------------------------
+        decision = np.select([~consider, follow, yield_, overtake, vru_stop,
+                              blocking & ~no_path[:, None], blocking],
+                             [D_IGNORE, D_FOLLOW, D_YIELD, D_OVERTAKE, D_STOP, D_NUDGE, D_STOP],
+                             D_IGNORE)
+        decision_s = np.select([decision == D_FOLLOW, decision == D_YIELD,
+                                decision == D_OVERTAKE, decision == D_STOP],
+                               [gap_follow, stop_yield - s0[:, None], s_hi - s0[:, None],
+                                np.minimum(stop_vru, so - lon_ext) - s0[:, None]], 0.0)
+        self.prev_decision = decision
+        self.prev_track = pred.track_id
+        standing = v0 < p["standstill_speed_mps"]
+        stopping = np.isin(reason, (R_DEST, R_LIGHT, R_YIELD, R_BLOCKED, R_VRU, R_FALLBACK)) & (
+            (a_cmd < 0) | standing)
+        main = np.where(estop, M_ESTOP, np.where(stopping | (standing & (a_cmd <= 0)), M_STOP,
+                                                 M_CRUISE))
+        stop_distance = np.where(main == M_STOP, np.where(
+            bind_gap < p["stop_decision_min_distance_m"], 0.0, np.minimum(bind_gap, 1e3)), 0.0)
+        x, y, th, kp, s, v, a = traj
+        return PlanningOutput(
+            x=x, y=y, theta=th, kappa=kp, s=s, v=v, a=a, t=t, valid=valid, decision=decision,
+            decision_s=np.where(np.isfinite(decision_s), decision_s, 0.0), nudge_offset=target,
+            main=main, stop_distance=stop_distance, reason=reason, estop=estop,
+            estop_reason=estop_reason, cruise_speed=v_cruise,
+            lane=road.ref_lane[road.ref_index(s0)],
+            total_length=s[:, -1] - s[:, 0], track_id=pred.track_id,
+        )
+
+    @staticmethod
+    def _sample(traj: tuple[np.ndarray, ...], t: np.ndarray, tq: np.ndarray
+                ) -> tuple[np.ndarray, ...]:
+        """Trajectory x, y, theta, s at times tq (N, Q) (uniform time grid per row)."""
+        dt = t[:, 1:2]
+        f = clip(tq / dt, 0.0, t.shape[1] - 1.000001)
+        i = f.astype(np.int64)
+        u = f - i
+        r = np.arange(t.shape[0])[:, None]
+        x, y, th, _, s = traj[:5]
+        lerp = [a[r, i] + u * (a[r, i + 1] - a[r, i]) for a in (x, y, s)]
+        return lerp[0], lerp[1], th[r, i], lerp[2]
+
+    def _trajectory(self, s0: np.ndarray, v0: np.ndarray, a_cmd: np.ndarray, vcap: np.ndarray,
+                    t: np.ndarray, offset_at) -> tuple[np.ndarray, ...]:  # noqa: ANN001
+        road = self.world.road
+        a = a_cmd[:, None]
+        v_acc = v0[:, None] + a * ACCEL_DECAY_S * (1.0 - np.exp(-t / ACCEL_DECAY_S))
+        v_dec = v0[:, None] + a * t
+        v = clip(np.where(a > 0, v_acc, v_dec), 0.0, vcap[:, None])
+        dt = np.diff(t, axis=1)
+        s = s0[:, None] + np.concatenate(
+            [np.zeros((t.shape[0], 1)), np.cumsum(0.5 * (v[:, 1:] + v[:, :-1]) * dt, axis=1)], 1)
+        acc = np.concatenate([np.diff(v, axis=1) / dt, np.zeros((t.shape[0], 1))], axis=1)
+        rx, ry, rh, rk = reference_at(road, s)
+        d = offset_at(s)
+        x = rx - d * np.sin(rh)
+        y = ry + d * np.cos(rh)
+        dd = np.gradient(d, axis=1) / np.maximum(np.gradient(s, axis=1), 1e-3)
+        th = wrap_angle(rh + np.arctan(dd))
+        return x, y, th, rk, s, v, acc
+
+
+__all__ = ["MAX_POINTS", "REASONS", "Planning", "PlanningOutput", "REF_SPACING_M"]

@@ -1,0 +1,173 @@
+"""Prediction: forecast trajectories per perceived obstacle (world frame).
+
+Intents: STATIONARY (slower than the still-obstacle threshold, unmovable, too far: no
+forecast), LANE_FOLLOW (along the matched lane and its successors), CONSTANT_VELOCITY, and
+CUT_IN for a cyclist close beside the ego (predicted to cross the ego's path).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.ads.localization import LocalizationOutput
+from rocas.ads.perception import (
+    T_BICYCLE,
+    T_PEDESTRIAN,
+    T_UNKNOWN_UNMOVABLE,
+    PerceptionOutput,
+)
+from rocas.sim.geometry import clip, nearest_on, wrap_angle
+from rocas.sim.world import BatchWorld
+
+#: Cyclists are matched to a lane this much farther from its centre than vehicles [m].
+CYCLIST_EXTRA_LANE_DISTANCE_M = 1.0
+#: Largest number of forecast points (8 s horizon at 0.5 s).
+MAX_POINTS = 16
+INTENT_UNKNOWN, INTENT_LANE_FOLLOW, INTENT_CONSTANT_VELOCITY, INTENT_CUT_IN, INTENT_STATIONARY = (
+    0, 1, 2, 3, 4)
+
+
+@dataclass(frozen=True, eq=False)
+class PredictionOutput:
+    """Forecasts, world frame. Obstacle fields (N, M); trajectories (N, M, K).
+
+    Attributes:
+        published: (N, M) bool (mirrors perception).
+        x, y [m], heading [rad] (perceived), vx, vy [m/s], speed [m/s]: current state, world.
+        length, width [m]; type (proto Type); track_id.
+        is_static: (N, M) bool; intent: (N, M) code.
+        traj_x, traj_y [m], traj_heading [rad] (path tangent), traj_v [m/s]: (N, M, K).
+        traj_t: (N, K) relative times [s]; traj_valid: (N, K) bool (within the horizon).
+        perception: the perception output the forecast was made from.
+    """
+
+    published: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    speed: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+    type: np.ndarray
+    track_id: np.ndarray
+    is_static: np.ndarray
+    intent: np.ndarray
+    traj_x: np.ndarray
+    traj_y: np.ndarray
+    traj_heading: np.ndarray
+    traj_v: np.ndarray
+    traj_t: np.ndarray
+    traj_valid: np.ndarray
+    perception: PerceptionOutput
+
+
+class Prediction:
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+        self.world = world
+        self.p = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("prediction.")}
+
+    def step(self, per: PerceptionOutput, loc: LocalizationOutput) -> PredictionOutput:
+        p = self.p
+        road = self.world.road
+        n, m = per.x.shape
+        c, s = np.cos(per.ego_heading)[:, None], np.sin(per.ego_heading)[:, None]
+        x = per.ego_x[:, None] + per.x * c - per.y * s
+        y = per.ego_y[:, None] + per.x * s + per.y * c
+        vx = per.vx * c - per.vy * s
+        vy = per.vx * s + per.vy * c
+        ax = per.ax * c - per.ay * s
+        ay = per.ax * s + per.ay * c
+        heading = wrap_angle(per.theta + per.ego_heading[:, None])
+        speed = np.hypot(vx, vy)
+        # relative to the ego now (localization)
+        lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
+        ex, ey = x - loc.x[:, None], y - loc.y[:, None]
+        rel_x = ex * lc + ey * ls
+        rel_y = -ex * ls + ey * lc
+        ped = per.type == T_PEDESTRIAN
+        still = np.where(ped, p["pedestrian_still_speed_mps"][:, None],
+                         p["still_obstacle_speed_mps"][:, None])
+        is_static = ((speed < still) | (per.type == T_UNKNOWN_UNMOVABLE)
+                     | (np.hypot(rel_x, rel_y) > p["max_distance_m"][:, None])
+                     | (rel_x < -p["behind_ignore_m"][:, None]))
+        # time grid
+        k = np.arange(1, MAX_POINTS + 1)
+        t = k[None, :] * p["time_step_s"][:, None]  # (N, K)
+        valid = t <= p["horizon_s"][:, None] + 1e-9
+        # longitudinal motion with a fading acceleration
+        along = np.where(speed > 0.05, (ax * vx + ay * vy) / np.maximum(speed, 1e-6), 0.0)
+        acc = clip(along, -p["max_accel_mps2"][:, None], p["max_accel_mps2"][:, None])
+        tau = p["accel_decay_s"][:, None, None]
+        tt = t[:, None, :]
+        vmax = np.where(ped, p["pedestrian_max_speed_mps"][:, None], p["max_speed_mps"][:, None])
+        v0 = np.minimum(speed, vmax)
+        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - np.exp(-tt / tau)), 0.0,
+                      vmax[..., None])
+        dt_k = p["time_step_s"][:, None, None]
+        dist_k = np.cumsum(0.5 * (v_k + np.concatenate([v0[..., None], v_k[..., :-1]], -1))
+                           * dt_k, axis=-1)
+        # constant velocity
+        dir_ = np.where(speed > 0.05, np.arctan2(vy, vx), heading)
+        cv_x = x[..., None] + np.cos(dir_)[..., None] * dist_k
+        cv_y = y[..., None] + np.sin(dir_)[..., None] * dist_k
+        cv_h = np.broadcast_to(dir_[..., None], cv_x.shape)
+        # lane follow
+        q, d2 = nearest_on(road.lane_points, road.lane_grid, x, y)
+        lane_h = road.lane_point_heading[q]
+        dh = np.abs(wrap_angle(dir_ - lane_h))
+        bike = per.type == T_BICYCLE
+        on_lane = ((np.sqrt(d2) <= p["lane_follow_max_distance_m"][:, None]
+                    + np.where(bike, CYCLIST_EXTRA_LANE_DISTANCE_M, 0.0))
+                   & (dh <= np.deg2rad(p["lane_follow_max_heading_deg"])[:, None])
+                   & (per.tracking_time >= p["min_tracking_time_s"][:, None])
+                   & ~ped)
+        lane = road.lane_point_lane[q]
+        s0 = road.lane_point_s[q]
+        cmax = road.chain_points.shape[1] - 1
+        pos = clip(s0[..., None] + dist_k, 0, cmax - 1e-6)
+        i = pos.astype(np.int64)
+        u = pos - i
+        li = lane[..., None]
+        p0 = road.chain_points[li, i]  # (N, M, K, 2)
+        p1 = road.chain_points[li, i + 1]
+        lf_h = road.chain_heading[li, i]
+        offx = x - road.lane_points[q, 0]
+        offy = y - road.lane_points[q, 1]
+        lat0 = -offx * np.sin(lane_h) + offy * np.cos(lane_h)
+        # vehicles converge to the lane centre; cyclists keep their offset (they ride the edge)
+        lat = lat0[..., None] * np.where(bike[..., None], 1.0, np.exp(
+            -tt / p["lane_follow_convergence_s"][:, None, None]))
+        lf_x = p0[..., 0] + u * (p1[..., 0] - p0[..., 0]) - lat * np.sin(lf_h)
+        lf_y = p0[..., 1] + u * (p1[..., 1] - p0[..., 1]) + lat * np.cos(lf_h)
+        # cyclist cut-in beside the ego: moves across the ego's path
+        cut_in = ((per.type == T_BICYCLE) & (np.abs(rel_x) <= p["cyclist_cut_in_longitudinal_m"]
+                                             [:, None])
+                  & (np.abs(rel_y) <= p["cyclist_cut_in_lateral_m"][:, None]) & ~is_static)
+        side = -np.sign(rel_y)
+        lat_v = p["cyclist_cut_in_lateral_speed_mps"][:, None] * side  # toward and across
+        ci_x = cv_x + (-ls * lat_v)[..., None] * tt
+        ci_y = cv_y + (lc * lat_v)[..., None] * tt
+        ci_h = np.arctan2(np.sin(dir_)[..., None] * speed[..., None] + (lc * lat_v)[..., None],
+                          np.cos(dir_)[..., None] * speed[..., None] - (ls * lat_v)[..., None])
+        ci_h = np.broadcast_to(ci_h, cv_x.shape)
+        intent = np.select([is_static, cut_in, on_lane],
+                           [INTENT_STATIONARY, INTENT_CUT_IN, INTENT_LANE_FOLLOW],
+                           INTENT_CONSTANT_VELOCITY)
+        sel_lf = (intent == INTENT_LANE_FOLLOW)[..., None]
+        sel_ci = (intent == INTENT_CUT_IN)[..., None]
+        tx = np.where(sel_lf, lf_x, np.where(sel_ci, ci_x, cv_x))
+        ty = np.where(sel_lf, lf_y, np.where(sel_ci, ci_y, cv_y))
+        th = np.where(sel_lf, lf_h, np.where(sel_ci, ci_h, cv_h))
+        st = is_static[..., None]
+        return PredictionOutput(
+            published=per.published, x=x, y=y, heading=heading, vx=vx, vy=vy, speed=speed,
+            length=per.length, width=per.width, type=per.type, track_id=per.track_id,
+            is_static=is_static, intent=intent,
+            traj_x=np.where(st, x[..., None], tx), traj_y=np.where(st, y[..., None], ty),
+            traj_heading=np.where(st, heading[..., None], th), traj_v=np.where(st, 0.0, v_k),
+            traj_t=t, traj_valid=valid, perception=per,
+        )

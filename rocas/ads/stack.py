@@ -1,0 +1,105 @@
+"""The ADS stack: modules wired by their channels, each run at its channel's rate.
+
+Per simulation step: localization and chassis publish; every perception period, perception
+(obstacles, traffic lights, brake signal), prediction and planning run in that order; control
+runs every step on the latest plan; canbus turns the command into actuation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.ads.control import Control, ControlOutput
+from rocas.ads.localization import Canbus, ChassisOutput, Localization, LocalizationOutput
+from rocas.ads.perception import Perception, PerceptionOutput, ground_truth
+from rocas.ads.planning import Planning, PlanningOutput
+from rocas.ads.prediction import Prediction, PredictionOutput
+from rocas.sim.dynamics import VehicleState
+from rocas.sim.world import BatchWorld, light_state
+
+PERCEPTION_PERIOD_S = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class TickOutputs:
+    """What the modules published in one step (None: the module did not run)."""
+
+    localization: LocalizationOutput
+    chassis: ChassisOutput
+    perception: PerceptionOutput | None
+    prediction: PredictionOutput | None
+    planning: PlanningOutput | None
+    control: ControlOutput
+
+
+class AdsStack:
+    """All modules of the built-in ADS for N variants (``params``: name -> (N,) array)."""
+
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+        self.world = world
+        self.period_ticks = max(1, int(round(PERCEPTION_PERIOD_S / world.dt_s)))
+        period = self.period_ticks * world.dt_s
+        self.localization = Localization(world, params)
+        self.canbus = Canbus(world, params)
+        self.perception = Perception(world, params, period)
+        self.prediction = Prediction(world, params)
+        self.planning = Planning(world, params)
+        self.control = Control(world, params)
+        self.plan: PlanningOutput | None = None
+        self.plan_time = 0.0
+
+    def step(self, tick: int, ego: VehicleState, ego_accel: np.ndarray, actors: VehicleState
+             ) -> TickOutputs:
+        t = tick * self.world.dt_s
+        loc = self.localization.step(tick, ego, ego_accel)
+        chassis = self.canbus.feedback(tick, ego)
+        per = pred = plan = None
+        if tick % self.period_ticks == 0 or self.plan is None:
+            gt = ground_truth(self.world, actors.x, actors.y, actors.yaw)
+            per = self.perception.step(tick, ego.x, ego.y, ego.yaw, gt,
+                                       light_state(self.world, t), loc)
+            pred = self.prediction.step(per, loc)
+            plan = self.planning.step(pred, per, loc, chassis)
+            self.plan, self.plan_time = plan, t
+        ctrl = self.control.step(t, self.plan, self.plan_time, loc, chassis)
+        return TickOutputs(loc, chassis, per, pred, plan, ctrl)
+
+    def actuate(self, ctrl: ControlOutput) -> tuple[np.ndarray, np.ndarray]:
+        return self.canbus.actuate(ctrl.throttle, ctrl.brake, ctrl.steering_target, ctrl.estop)
+
+
+def output_digest(out: TickOutputs) -> dict[str, np.ndarray]:
+    """A per-variant fingerprint (N,) of what each module published this step; summed over a
+    run it shows whether a parameter changed a module's output."""
+    def fp(obj: object, names: tuple[str, ...]) -> np.ndarray:
+        total = 0.0
+        for name in names:
+            a = np.asarray(getattr(obj, name), dtype=np.float64)
+            a = np.where(np.isfinite(a), a, 0.0)
+            total = total + (a.reshape(a.shape[0], -1) * 1.0001 ** np.arange(
+                a.reshape(a.shape[0], -1).shape[1])).sum(axis=1)
+        return total
+
+    d = {
+        "localization": fp(out.localization, ("x", "y", "heading", "speed", "lane", "lane_s")),
+        "canbus": fp(out.chassis, ("speed", "throttle", "brake", "steering")),
+        "control": fp(out.control, ("throttle", "brake", "steering_target", "acceleration",
+                                    "estop", "lateral_error", "station_error")),
+    }
+    if out.perception is not None:
+        per = out.perception
+        pub = per.published
+        d["perception"] = fp(per, ("brake_probability", "brake", "tl_color", "tl_selected",
+                                   "tl_confidence", "tl_detected")) + sum(
+            (np.where(pub, getattr(per, f), 0.0) * (1 + np.arange(pub.shape[1]))).sum(1)
+            for f in ("track_id", "type", "sub_type", "color", "x", "y", "theta", "vx", "vy",
+                      "length", "width", "confidence"))
+        d["prediction"] = fp(out.prediction, ("is_static", "intent")) + (
+            np.where(out.prediction.traj_valid[:, None, :] & pub[..., None],
+                     out.prediction.traj_x + 0.7 * out.prediction.traj_y, 0.0).sum((1, 2)))
+        d["planning"] = fp(out.planning, ("decision", "main", "reason", "estop", "cruise_speed",
+                                          "nudge_offset", "stop_distance")) + np.where(
+            out.planning.valid, out.planning.x + out.planning.v, 0.0).sum(1)
+    return d
