@@ -1,0 +1,199 @@
+"""A constrained multi-objective genetic search (NSGA-II from pymoo), driven ask-and-tell.
+
+The caller supplies ``evaluate(mutations) -> [(objectives, constraint)]`` for a whole batch
+(where it fans out to an executor). ``constraint <= 0`` means the accident is avoided; a
+graded value (e.g. how far the run was from being safe) guides the search towards
+feasibility. The state after each generation can be checkpointed (the pymoo algorithm,
+including its random generator, is pickled), so a resumed search continues exactly where it
+stopped and gives the same result as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rocas._fs import atomic_path
+from rocas.errors import UsageError
+from rocas.search.space import Mutation, MutationSpace
+
+Evaluation = tuple[tuple[float, ...], float]  # (objectives, constraint: <= 0 is feasible)
+BatchEvaluate = Callable[[list[Mutation]], list[Evaluation]]
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """Budget and settings of one search.
+
+    Attributes:
+        population: individuals per generation.
+        generations: number of generations (a fixed termination: pymoo's default may run
+            to 1000).
+        seed: random seed.
+        single_property_share: fraction of the first population made of single-property
+            mutants (the rest mutates each variable with probability ``mutate_prob``).
+        mutate_prob: per-variable mutation probability of the random part.
+        stop_when_feasible_after: stop early once this many generations have run and a
+            feasible candidate exists (0 = never stop early).
+    """
+
+    population: int = 24
+    generations: int = 10
+    seed: int = 0
+    single_property_share: float = 1.0
+    mutate_prob: float = 0.2
+    stop_when_feasible_after: int = 0
+
+    def __post_init__(self) -> None:
+        if self.population < 2 or self.generations < 1:
+            raise UsageError("a search needs a population of at least 2 and >= 1 generation")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One evaluated individual.
+
+    Attributes:
+        mutation: what it changes.
+        objectives: its objective values (minimised).
+        constraint: <= 0 when the accident is avoided.
+        generation: the generation it was evaluated in.
+    """
+
+    mutation: Mutation
+    objectives: tuple[float, ...]
+    constraint: float
+    generation: int
+
+    @property
+    def feasible(self) -> bool:
+        return self.constraint <= 0
+
+
+@dataclass
+class GenerationStats:
+    """What one generation produced (for progress bars and the Rerun timeline)."""
+
+    generation: int
+    evaluations: int
+    feasible: int
+    best_constraint: float
+    objectives: np.ndarray  # (population, n_obj)
+    constraints: np.ndarray  # (population,)
+
+
+@dataclass
+class SearchResult:
+    """All evaluated candidates, the feasible Pareto front and per-generation stats."""
+
+    candidates: list[Candidate]
+    front: list[Candidate]
+    generations: list[GenerationStats] = field(default_factory=list)
+
+    @property
+    def evaluations(self) -> int:
+        return len(self.candidates)
+
+    @property
+    def feasible(self) -> list[Candidate]:
+        return [c for c in self.candidates if c.feasible]
+
+
+@dataclass
+class _State:
+    algorithm: Any
+    problem: Any
+    candidates: list[Candidate]
+    generations: list[GenerationStats]
+    cache: dict[Mutation, Evaluation]
+
+
+def _initial_population(space: MutationSpace, cfg: SearchConfig) -> np.ndarray:
+    rng = np.random.default_rng(cfg.seed)
+    n_single = int(round(cfg.population * cfg.single_property_share))
+    parts = [space.single_property_seeds(n_single, rng)] if n_single else []
+    if cfg.population - n_single:
+        parts.append(space.sample(cfg.population - n_single, rng, cfg.mutate_prob))
+    return np.vstack(parts)
+
+
+def run_search(
+    space: MutationSpace,
+    evaluate: BatchEvaluate,
+    cfg: SearchConfig,
+    n_objectives: int,
+    *,
+    checkpoint: str | os.PathLike[str] | None = None,
+    on_generation: Callable[[GenerationStats], None] | None = None,
+) -> SearchResult:
+    """Run NSGA-II over ``space``; resumes from ``checkpoint`` when it exists.
+
+    Identical mutations are evaluated once (results are cached per search).
+    """
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.termination import get_termination
+
+    from rocas.search._problem import SearchProblem
+
+    ckpt = Path(checkpoint) if checkpoint else None
+    if ckpt is not None and ckpt.exists():
+        with open(ckpt, "rb") as f:
+            state: _State = pickle.load(f)
+    else:
+        problem = SearchProblem(space.n_genes, n_objectives)
+        algorithm = NSGA2(pop_size=cfg.population, sampling=_initial_population(space, cfg),
+                          eliminate_duplicates=True)
+        algorithm.setup(problem, termination=get_termination("n_gen", cfg.generations),
+                        seed=cfg.seed, verbose=False)
+        state = _State(algorithm, problem, [], [], {})
+
+    algo, problem = state.algorithm, state.problem
+    while algo.has_next():
+        gen = algo.n_gen if algo.n_gen is not None else 1
+        pop = algo.ask()
+        genomes = pop.get("X")
+        mutations = [space.decode(g) for g in genomes]
+        todo = list(dict.fromkeys(m for m in mutations if m not in state.cache))
+        for m, ev in zip(todo, evaluate(todo), strict=True):
+            state.cache[m] = ev
+            state.candidates.append(Candidate(m, tuple(ev[0]), float(ev[1]), gen))
+        f = np.array([state.cache[m][0] for m in mutations], dtype=float).reshape(len(mutations), -1)
+        g = np.array([[state.cache[m][1]] for m in mutations], dtype=float)
+        problem.pending = (f, g)
+        algo.evaluator.eval(problem, pop)
+        problem.pending = None
+        algo.tell(infills=pop)
+        stats = GenerationStats(gen, len(state.candidates), int((g[:, 0] <= 0).sum()),
+                                float(g.min()), f, g[:, 0])
+        state.generations.append(stats)
+        if on_generation is not None:
+            on_generation(stats)
+        if ckpt is not None:
+            with atomic_path(ckpt) as tmp, open(tmp, "wb") as fh:
+                pickle.dump(state, fh)
+        if (cfg.stop_when_feasible_after and gen >= cfg.stop_when_feasible_after
+                and any(c.feasible for c in state.candidates)):
+            break
+
+    return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
+
+
+def pareto_front(candidates: Sequence[Candidate]) -> list[Candidate]:
+    """Feasible candidates not dominated by another feasible one (stable order)."""
+    feas = [c for c in candidates if c.feasible]
+    front = []
+    for c in feas:
+        dominated = any(
+            all(o <= p for o, p in zip(d.objectives, c.objectives, strict=True))
+            and any(o < p for o, p in zip(d.objectives, c.objectives, strict=True))
+            for d in feas
+        )
+        if not dominated:
+            front.append(c)
+    return front

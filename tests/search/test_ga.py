@@ -1,0 +1,87 @@
+import pytest
+import search_toy
+from search_toy import SPACE
+
+from rocas.errors import UsageError
+from rocas.search import LocalExecutor, SearchConfig, SerialExecutor, make_executor, run_search
+from rocas.search.minimize import shrink_magnitudes, shrink_set
+from rocas.search.space import Mutation
+
+CFG = SearchConfig(population=14, generations=6, seed=3)
+
+
+def _search(executor, checkpoint=None, on_generation=None, cfg=CFG):
+    def evaluate(mutations):
+        return executor.map(search_toy.simulate, mutations)
+
+    return run_search(SPACE, evaluate, cfg, n_objectives=2, checkpoint=checkpoint,
+                      on_generation=on_generation)
+
+
+def _summary(result):
+    return [(c.mutation, c.objectives, c.constraint, c.generation) for c in result.candidates]
+
+
+def test_search_finds_a_feasible_fix_on_the_front():
+    res = _search(SerialExecutor())
+    assert res.front and all(c.feasible for c in res.front)
+    best = min(res.front, key=lambda c: c.objectives)
+    assert len(best.mutation.values) == 1
+    assert set(best.mutation.values) <= {"truck.speed", "cone.enabled"}
+
+
+def test_same_result_whatever_the_executor_and_workers():
+    serial = _summary(_search(SerialExecutor()))
+    with LocalExecutor(workers=2) as pool:
+        assert _summary(_search(pool)) == serial
+
+
+def test_resume_continues_to_the_same_result(tmp_path):
+    full = _summary(_search(SerialExecutor()))
+    ckpt = tmp_path / "search.pkl"
+
+    def stop_after_three(stats):
+        if stats.generation == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop_after_three)
+    assert ckpt.exists()
+    assert _summary(_search(SerialExecutor(), checkpoint=ckpt)) == full
+
+
+def test_identical_mutations_are_simulated_once():
+    calls = []
+
+    def evaluate(mutations):
+        calls.extend(mutations)
+        return search_toy.batch(mutations)
+
+    res = run_search(SPACE, evaluate, CFG, n_objectives=2)
+    assert len(calls) == len(set(calls)) == res.evaluations
+
+
+def test_shrink_set_drops_irrelevant_variables():
+    fix = Mutation({"truck.speed": 3.0, "car.x": 10.0, "weather.fog": 40.0, "ped.speed": 0.1})
+
+    def holds(ms):
+        return [search_toy.avoided(m) for m in ms]
+
+    small, n = shrink_set(fix, holds)
+    assert small == Mutation({"truck.speed": 3.0}) and n > 0
+
+
+def test_shrink_magnitudes_moves_towards_the_boundary():
+    def holds(ms):
+        return [search_toy.avoided(m) for m in ms]
+
+    small, _ = shrink_magnitudes(Mutation({"truck.speed": 2.0}), SPACE, holds, steps=8)
+    assert 7.9 <= small.values["truck.speed"] <= 8.0
+
+
+def test_executor_registry():
+    assert make_executor("serial").name == "serial"
+    with pytest.raises(UsageError, match="unknown executor"):
+        make_executor("cluster")
+    with pytest.raises(UsageError):
+        LocalExecutor(workers=0)
