@@ -1,0 +1,146 @@
+"""The exit-code table, the one-line error format, --traceback and Ctrl-C (docs/errors.md)."""
+
+from __future__ import annotations
+
+import importlib
+import json
+
+import pytest
+from foreign_stack import make_pair
+
+from rocas.cli.exit_codes import ExitStatus, exit_status_for
+from rocas.errors import (
+    InputError,
+    NotReproducedError,
+    RecordingError,
+    RocasError,
+    ScenarioError,
+    TopologyError,
+    UsageError,
+)
+
+TABLE = [
+    (UsageError("--bin must be positive", "give a bin width in seconds"), 2),
+    (InputError("cannot read cmg.json", "check the path"), 3),
+    (RecordingError("a.mcap is empty (0 bytes)", "give a non-empty MCAP recording"), 3),
+    (TopologyError("no channel has topology", "pass --cmg FILE"), 3),
+    (ScenarioError("speed must be positive", None), 3),
+    (NotReproducedError("the replay did not collide", "widen the search"), 4),
+    (RocasError("something rocas refused", None), 3),
+]
+
+
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    return make_pair(tmp_path_factory.mktemp("errors"), deviating="behaviour")
+
+
+def _raising(exc: BaseException):
+    def fake_diff(*args, **kwargs):
+        raise exc
+
+    return fake_diff
+
+
+def _patch_diff(monkeypatch, exc: BaseException) -> None:
+    """Make the analysis behind ``rocas diff`` raise ``exc`` (the CLI imports it lazily)."""
+    module = importlib.import_module("rocas.analysis.diff")
+    monkeypatch.setattr(module, "diff", _raising(exc))
+
+
+def test_the_documented_exit_codes():
+    assert {s.name: int(s) for s in ExitStatus} == {
+        "SUCCESS": 0, "INTERNAL": 1, "USAGE": 2, "INPUT": 3, "NOT_REPRODUCED": 4,
+        "INTERRUPTED": 130,
+    }
+    assert exit_status_for(KeyboardInterrupt()) == 130
+    assert exit_status_for(ZeroDivisionError()) == 1
+
+
+@pytest.mark.parametrize(("exc", "code"), TABLE, ids=lambda x: type(x).__name__)
+def test_each_error_is_one_line_with_its_exit_code(rocas, monkeypatch, pair, exc, code):
+    assert exit_status_for(exc) == code
+    _patch_diff(monkeypatch, exc)
+    res = rocas("diff", pair.accident, pair.reference)
+    assert res.code == code
+    expected = f"rocas: error: {exc.message}" + (f" ({exc.hint})" if exc.hint else "")
+    assert res.stderr == expected + "\n"
+    assert res.stdout == ""
+
+
+def test_a_bug_is_an_internal_error_that_asks_for_a_report(rocas, monkeypatch, pair):
+    _patch_diff(monkeypatch, ZeroDivisionError("division by zero"))
+    res = rocas("diff", pair.accident, pair.reference)
+    assert res.code == 1
+    lines = res.stderr.splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("rocas: error: internal error: ZeroDivisionError: division by zero")
+    assert "--traceback" in lines[0] and "Traceback" not in res.stderr
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_traceback_shows_the_full_story(rocas, monkeypatch, pair, where):
+    _patch_diff(monkeypatch, ZeroDivisionError("division by zero"))
+    argv = ["diff", pair.accident, pair.reference]
+    argv = ["--traceback", *argv] if where == "before" else [*argv, "--traceback"]
+    res = rocas(*argv)
+    assert res.code == 1
+    assert "Traceback (most recent call last)" in res.stderr
+    assert "fake_diff" in res.stderr  # the frame that raised
+    assert res.stderr.rstrip().splitlines()[-1].startswith("rocas: error: internal error")
+
+
+def test_ctrl_c_exits_130_and_says_nothing_was_written(rocas, monkeypatch, pair):
+    _patch_diff(monkeypatch, KeyboardInterrupt())
+    res = rocas("diff", pair.accident, pair.reference)
+    assert res.code == 130
+    assert res.stderr == "rocas: error: interrupted (no output was written)\n"
+
+
+def test_ctrl_c_reports_what_was_kept(rocas, monkeypatch, pair):
+    exc = KeyboardInterrupt()
+    exc.kept = "kept 12 finished simulations in run/"
+    _patch_diff(monkeypatch, exc)
+    res = rocas("diff", pair.accident, pair.reference)
+    assert res.code == 130
+    assert res.stderr == "rocas: error: interrupted (kept 12 finished simulations in run/)\n"
+    res = rocas("--traceback", "diff", pair.accident, pair.reference)
+    assert res.code == 130 and "KeyboardInterrupt" in res.stderr
+
+
+def test_ctrl_c_while_writing_the_rrd_leaves_no_file(rocas, monkeypatch, pair, tmp_path):
+    def interrupted(rec, result, prefix="diff"):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("rocas.viz.diff.log_diff", interrupted)
+    out = tmp_path / "out" / "diff.rrd"
+    res = rocas("diff", pair.accident, pair.reference, "--rrd", out)
+    assert res.code == 130
+    assert "interrupted (no output was written)" in res.stderr
+    assert not out.exists()
+    assert list(out.parent.iterdir()) == []  # no temporary file left behind either
+
+
+def test_a_damaged_but_usable_recording_warns_and_succeeds(rocas, pair, tmp_path):
+    data = bytearray(pair.accident.read_bytes())
+    data[len(data) // 3 : len(data) // 3 + 64] = bytes(64)  # a run of zeros in mid-file
+    bad = tmp_path / "zeros.mcap"
+    bad.write_bytes(bytes(data))
+    res = rocas("diff", bad, pair.reference, "--json")
+    assert res.code == 0, res.stderr
+    assert all(line.startswith("rocas: warning: ") for line in res.stderr.splitlines())
+    assert str(bad) in res.stderr
+    out = json.loads(res.stdout)
+    assert out["warnings"] and out["messages_read"]["accident"] > 0
+
+
+def test_nothing_usable_left_is_an_input_error(rocas, pair, tmp_path):
+    head = pair.accident.read_bytes()[:40]  # magic + the start of the header record
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.mcap").write_bytes(head)
+    res = rocas("diff", tmp_path / "a.mcap", tmp_path / "b.mcap")
+    assert res.code == 3
+    assert res.stderr.splitlines()[-1] == (
+        "rocas: error: neither recording holds a readable message (check the files with 'mcap info')"
+    )
+    assert len(res.stderr.splitlines()) == 1
