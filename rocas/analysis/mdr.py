@@ -22,6 +22,7 @@ of a topic with one class built from their (identical) schema.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -69,8 +70,10 @@ class _Plan:
     fields: tuple[_Field, ...]
 
 
-# keyed by the descriptor object itself (not id(): a freed pool's ids get reused)
-_PLANS: dict[Descriptor, _Plan] = {}
+# keyed weakly by the message class (not by descriptor: descriptors cannot be weakly referenced,
+# and every diff builds new classes, so a strong cache would grow without end; not by id(): a
+# freed class's id gets reused)
+_PLANS: weakref.WeakKeyDictionary[type, _Plan] = weakref.WeakKeyDictionary()
 
 
 def _is_repeated(fd: FieldDescriptor) -> bool:
@@ -80,16 +83,23 @@ def _is_repeated(fd: FieldDescriptor) -> bool:
     return fd.label == FieldDescriptor.LABEL_REPEATED  # older runtimes
 
 
-def _plan_for(desc: Descriptor) -> _Plan:
-    """Compile (and cache) the comparison plan of a message type."""
-    key = desc
-    plan = _PLANS.get(key)
+def _plan_for_class(cls: type) -> _Plan:
+    """The (cached) comparison plan of a message class."""
+    plan = _PLANS.get(cls)
+    if plan is None:
+        plan = _PLANS[cls] = _plan_for(cls.DESCRIPTOR, {})  # type: ignore[attr-defined]
+    return plan
+
+
+def _plan_for(desc: Descriptor, memo: dict[Descriptor, _Plan]) -> _Plan:
+    """Compile the comparison plan of a message type (``memo``: plans of this compilation)."""
+    plan = memo.get(desc)
     if plan is not None:
         return plan
     # placeholder for recursive types; fields are filled below
     fields: list[_Field] = []
     plan = _Plan(desc.full_name, ())
-    _PLANS[key] = plan
+    memo[desc] = plan
     for fd in desc.fields:
         is_repeated = _is_repeated(fd)
         if fd.type == FieldDescriptor.TYPE_MESSAGE:
@@ -97,15 +107,15 @@ def _plan_for(desc: Descriptor) -> _Plan:
             if is_repeated and mt.GetOptions().map_entry:
                 vfd = mt.fields_by_name["value"]
                 if vfd.type == FieldDescriptor.TYPE_MESSAGE:
-                    fields.append(_Field(fd.name, _MAP, _plan_for(vfd.message_type), _MESSAGE))
+                    fields.append(_Field(fd.name, _MAP, _plan_for(vfd.message_type, memo), _MESSAGE))
                 elif vfd.type in _FLOAT_TYPES:
                     fields.append(_Field(fd.name, _MAP, None, _FLOAT))
                 else:
                     fields.append(_Field(fd.name, _MAP, None, _SCALAR))
             elif is_repeated:
-                fields.append(_Field(fd.name, _REP_MESSAGE, _plan_for(mt)))
+                fields.append(_Field(fd.name, _REP_MESSAGE, _plan_for(mt, memo)))
             else:
-                fields.append(_Field(fd.name, _MESSAGE, _plan_for(mt)))
+                fields.append(_Field(fd.name, _MESSAGE, _plan_for(mt, memo)))
         elif fd.type in _FLOAT_TYPES:
             fields.append(_Field(fd.name, _REP_FLOAT if is_repeated else _FLOAT))
         else:
@@ -239,7 +249,7 @@ def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
             b2 = type(a)()
             b2.ParseFromString(b.SerializeToString())
             b = b2
-        return _message(a, b, _plan_for(a.DESCRIPTOR), tol)
+        return _message(a, b, _plan_for_class(type(a)), tol)
     if isinstance(a, Message) or isinstance(b, Message):
         return 1.0
     return _json(a, b, tol)
