@@ -121,8 +121,10 @@ class Planning:
         lat_ext = hw_o * np.abs(np.cos(rel)) + hl_o * np.abs(np.sin(rel))
         lon_ext = hl_o * np.abs(np.cos(rel)) + hw_o * np.abs(np.sin(rel))
         buf_vru = np.where(vru, c("vru_lateral_buffer_m"), 0.0)
-        consider = pub & (np.abs(lo) < c("obstacle_consider_lateral_m")) & (
-            so + lon_ext > (s0 - hl_e)[:, None] - c("obstacle_ignore_behind_m"))
+        not_behind = pub & (so + lon_ext > (s0 - hl_e)[:, None] - c("obstacle_ignore_behind_m"))
+        # near the reference now: shapes the path and the follow decision; moving obstacles
+        # farther out still enter the ST-overlap and collision checks through their forecasts
+        consider = not_behind & (np.abs(lo) < c("obstacle_consider_lateral_m"))
         # --- path: nudge around static obstacles ------------------------------------------
         static = consider & pred.is_static & (so - lon_ext - s0[:, None] < c("nudge_lookahead_m"))
         static &= so + lon_ext > (s0 - hl_e)[:, None]
@@ -173,7 +175,7 @@ class Planning:
         lat_k = hw_o[..., None] * np.abs(np.cos(rel_k)) + hl_o[..., None] * np.abs(np.sin(rel_k))
         lon_k = hl_o[..., None] * np.abs(np.cos(rel_k)) + hw_o[..., None] * np.abs(np.sin(rel_k))
         tk = pred.traj_t[:, None, :]
-        mov = consider & ~pred.is_static
+        mov = not_behind & ~pred.is_static
         over = (mov[..., None] & pred.traj_valid[:, None, :]
                 & (tk <= p["overlap_check_horizon_s"][:, None, None])
                 & (np.abs(lk - offset_at(sk)) < hw_e + lat_k + c("lateral_safety_buffer_m")[..., None]
@@ -184,9 +186,19 @@ class Planning:
         t_in = np.take_along_axis(pred.traj_t, k_in, axis=1)
         s_lo = np.min(np.where(over, sk - lon_k, np.inf), -1) - c("st_longitudinal_buffer_m")
         s_hi = np.max(np.where(over, sk + lon_k, -np.inf), -1) + c("st_longitudinal_buffer_m")
-        cross = any_over & ~follow & ~vru_stop
-        t_pass = (s_hi + c("min_overtake_distance_m") - (s0 - hl_e)[:, None]) / np.maximum(
-            v0, 1.0)[:, None]
+        behind_same_way = aligned & (so < s0[:, None])
+        cross = any_over & ~follow & ~vru_stop & ~behind_same_way
+        # time for the ego's rear to clear the region plus the margin, accelerating at
+        # max_accel up to the cruise speed
+        dist_pass = np.maximum(s_hi + c("min_overtake_distance_m") - (s0 - hl_e)[:, None], 0.0)
+        a_pass = p["max_accel_mps2"][:, None]
+        vc = np.maximum(v_cruise, v0)[:, None]
+        v0c = v0[:, None]
+        t1 = (vc - v0c) / a_pass
+        d1 = (vc * vc - v0c * v0c) / (2.0 * a_pass)
+        t_pass = np.where(dist_pass <= d1,
+                          (np.sqrt(v0c * v0c + 2.0 * a_pass * dist_pass) - v0c) / a_pass,
+                          t1 + (dist_pass - d1) / np.maximum(vc, 0.1))
         same = self.prev_track == pred.track_id
         was_yield = same & (self.prev_decision == D_YIELD)
         need = c("overtake_time_buffer_s") + np.where(was_yield, c("decision_hysteresis_s"), 0.0)
@@ -241,8 +253,19 @@ class Planning:
         bound = np.isfinite(a_c.min(axis=1)) & (a_c.min(axis=1) < a_free)
         reason = np.where(bound, reasons[np.arange(n), binding], R_CRUISE)
         bind_gap = np.where(bound, gaps[np.arange(n), binding], inf)
+        # hold still at a stop point reached (no creeping)
+        at_stop = (v0 < p["standstill_speed_mps"]) & bound & (reasons[np.arange(n), binding]
+                                                              != R_FOLLOW) & (bind_gap < 2.0)
+        a_cmd = np.where(at_stop, np.minimum(a_cmd, 0.0), a_cmd)
         estop = np.zeros(n, dtype=bool)
         estop_reason = np.zeros(n, dtype=np.int64)
+        # blocked with no feasible path and too close to stop comfortably: emergency stop
+        gap_block = stop_block - s0
+        urgent = np.isfinite(gap_block) & (
+            v0 * v0 / (2.0 * np.maximum(gap_block, 0.1)) > p["max_decel_mps2"])
+        a_cmd = np.where(urgent, -p["emergency_decel_mps2"], a_cmd)
+        estop |= urgent
+        estop_reason = np.where(urgent, E_NO_PATH, estop_reason)
         pbrake = per.brake & (p["perception_brake_enabled"] >= 0.5)
         a_cmd = np.where(pbrake, np.minimum(a_cmd, -p["perception_brake_decel_mps2"]), a_cmd)
         estop |= pbrake
@@ -267,7 +290,7 @@ class Planning:
                       ox, oy, oh, hl_o[..., None], hw_o[..., None])
         thr = np.where(pred.is_static, c("collision_check_static_m"),
                        c("collision_check_moving_m"))
-        hit = pub[..., None] & tcheck[:, None, :] & (gap < thr[..., None])
+        hit = (consider | mov)[..., None] & tcheck[:, None, :] & (gap < thr[..., None])
         hit_k = hit.any(axis=1)
         collide = hit_k.any(axis=1)
         k_hit = np.argmax(hit_k, axis=1)
@@ -287,7 +310,7 @@ class Planning:
             a_cmd = a_new
             traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # --- decisions --------------------------------------------------------------------
-        decision = np.select([~consider, follow, yield_, overtake, vru_stop,
+        decision = np.select([~(consider | mov), follow, yield_, overtake, vru_stop,
                               blocking & ~no_path[:, None], blocking],
                              [D_IGNORE, D_FOLLOW, D_YIELD, D_OVERTAKE, D_STOP, D_NUDGE, D_STOP],
                              D_IGNORE)

@@ -40,6 +40,7 @@ class PredictionOutput:
         is_static: (N, M) bool; intent: (N, M) code.
         traj_x, traj_y [m], traj_heading [rad] (path tangent), traj_v [m/s]: (N, M, K).
         traj_t: (N, K) relative times [s]; traj_valid: (N, K) bool (within the horizon).
+        probability: (N,) probability published with each forecast; horizon: (N,) [s].
         perception: the perception output the forecast was made from.
     """
 
@@ -62,6 +63,8 @@ class PredictionOutput:
     traj_v: np.ndarray
     traj_t: np.ndarray
     traj_valid: np.ndarray
+    probability: np.ndarray
+    horizon: np.ndarray
     perception: PerceptionOutput
 
 
@@ -169,5 +172,6 @@ class Prediction:
             is_static=is_static, intent=intent,
             traj_x=np.where(st, x[..., None], tx), traj_y=np.where(st, y[..., None], ty),
             traj_heading=np.where(st, heading[..., None], th), traj_v=np.where(st, 0.0, v_k),
-            traj_t=t, traj_valid=valid, perception=per,
+            traj_t=t, traj_valid=valid, probability=p["trajectory_probability"],
+            horizon=p["horizon_s"], perception=per,
         )

@@ -96,7 +96,7 @@ def output_digest(out: TickOutputs) -> dict[str, np.ndarray]:
             (np.where(pub, getattr(per, f), 0.0) * (1 + np.arange(pub.shape[1]))).sum(1)
             for f in ("track_id", "type", "sub_type", "color", "x", "y", "theta", "vx", "vy",
                       "length", "width", "confidence"))
-        d["prediction"] = fp(out.prediction, ("is_static", "intent")) + (
+        d["prediction"] = fp(out.prediction, ("is_static", "intent", "probability", "horizon")) + (
             np.where(out.prediction.traj_valid[:, None, :] & pub[..., None],
                      out.prediction.traj_x + 0.7 * out.prediction.traj_y, 0.0).sum((1, 2)))
         d["planning"] = fp(out.planning, ("decision", "main", "reason", "estop", "cruise_speed",
