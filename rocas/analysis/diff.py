@@ -20,7 +20,7 @@ from rocas.analysis.cmg import (
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module
 from rocas.analysis.series import ChannelSeries, compute_series
-from rocas.errors import UsageError
+from rocas.errors import RecordingError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
 
@@ -195,10 +195,11 @@ def diff(
         adjacent_pairing=not strict_bins,
     )
     if sum(res.messages_read) == 0:
-        from rocas.errors import RecordingError
-
+        damage = rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference))
         raise RecordingError(
-            "neither recording holds a readable message", "check the files with 'mcap info'"
+            "neither recording holds a readable message"
+            + (f": {damage[0]}" if damage else ""),
+            "check the files with 'mcap info'",
         )
     channel_infos = list(rec_a.channels.values())
     known = {c.topic for c in channel_infos}
