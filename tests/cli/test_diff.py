@@ -149,14 +149,3 @@ def test_traceback_flag_shows_the_story(rocas, pair, tmp_path):
     res = rocas("--traceback", "diff", tmp_path / "nope.mcap", pair.reference)
     assert res.code == 3 and "Traceback" in res.stderr
 
-
-def test_nothing_readable_says_why(rocas, tmp_path):
-    from rocas.recording.synthetic import MixConfig, write_mix_run
-
-    path = tmp_path / "a.mcap"
-    write_mix_run(path, accident=True, cfg=MixConfig(duration_s=1.0, obstacles=2))
-    data = path.read_bytes()
-    cut = tmp_path / "cut.mcap"
-    cut.write_bytes(data[:40])  # magic and part of the header only
-    line = _one_error_line(rocas("diff", cut, cut), "holds a readable message")
-    assert "truncated" in line
