@@ -126,7 +126,9 @@ class Planning:
         # farther out still enter the ST-overlap and collision checks through their forecasts
         consider = not_behind & (np.abs(lo) < c("obstacle_consider_lateral_m"))
         # --- path: nudge around static obstacles ------------------------------------------
-        static = consider & pred.is_static & (so - lon_ext - s0[:, None] < c("nudge_lookahead_m"))
+        # static obstacles shape the path (nudge); people standing in the way are waited for
+        static = consider & pred.is_static & ~vru & (
+            so - lon_ext - s0[:, None] < c("nudge_lookahead_m"))
         static &= so + lon_ext > (s0 - hl_e)[:, None]
         half = lat_ext + c("static_obstacle_lateral_buffer_m") + hw_e + buf_vru
         lo_b, hi_b = lo - half, lo + half
@@ -140,8 +142,8 @@ class Planning:
         target = np.where(no_path, 0.0, cands[np.arange(n), best])
         blocking = static & (lo_b < 0.0) & (hi_b > 0.0)
         any_block = blocking.any(axis=1)
-        first_s = np.min(np.where(blocking, so - lon_ext, np.inf), axis=1)
-        last_s = np.max(np.where(blocking, so + lon_ext, -np.inf), axis=1)
+        first_s = np.min(np.where(blocking, so - lon_ext, np.inf), axis=1, initial=np.inf)
+        last_s = np.max(np.where(blocking, so + lon_ext, -np.inf), axis=1, initial=-np.inf)
         target = np.where(any_block, target, 0.0)
         tr = p["nudge_transition_m"]
         a0 = np.where(any_block, first_s - hl_e - tr, 0.0)
