@@ -248,14 +248,16 @@ class Perception:
         # classification and colour
         movable = ~static_obj
         unsure = conf < p["classify_min_confidence"][:, None]
-        typ = np.select([static_obj, movable & unsure, gt.kind == KIND_PEDESTRIAN,
-                         gt.kind == KIND_CYCLIST], [T_UNKNOWN_UNMOVABLE, T_UNKNOWN_MOVABLE,
-                                                     T_PEDESTRIAN, T_BICYCLE], T_VEHICLE)
-        sub = np.select(
-            [gt.kind == KIND_CONE, gt.kind == KIND_BOX, movable & unsure,
-             gt.kind == KIND_PEDESTRIAN, gt.kind == KIND_CYCLIST],
-            [ST_CONE, ST_BOX, ST_UNKNOWN, ST_PEDESTRIAN, ST_CYCLIST],
-            clip(gt.model, 0, 3) + ST_CAR)
+        is_ped = gt.kind == KIND_PEDESTRIAN
+        is_bike = gt.kind == KIND_CYCLIST
+        unknown = movable & unsure
+        typ = np.where(static_obj, T_UNKNOWN_UNMOVABLE, np.where(
+            unknown, T_UNKNOWN_MOVABLE, np.where(is_ped, T_PEDESTRIAN, np.where(
+                is_bike, T_BICYCLE, T_VEHICLE))))
+        sub = np.where(gt.kind == KIND_CONE, ST_CONE, np.where(
+            gt.kind == KIND_BOX, ST_BOX, np.where(unknown, ST_UNKNOWN, np.where(
+                is_ped, ST_PEDESTRIAN, np.where(is_bike, ST_CYCLIST,
+                                                clip(gt.model, 0, 3) + ST_CAR)))))
         color = np.where(dist <= p["color_max_distance_m"][:, None], gt.color, -1)
         # publish in the ego frame of the localization estimate
         ddx, ddy = self.tx - loc.x[:, None], self.ty - loc.y[:, None]

@@ -169,25 +169,36 @@ class Planning:
         moving_vru = vru & ~pred.is_static
         follow = in_path_now & ~pred.is_static & (aligned | moving_vru)
         vru_stop = in_path_now & vru & pred.is_static
-        # trajectories
-        _, sk, lk = project_on_reference(road, pred.traj_x, pred.traj_y)
-        ref_hk = road.ref_heading[road.ref_index(sk)]
-        head_k = np.where(tangent, pred.traj_heading, pred.heading[..., None])
-        rel_k = head_k - ref_hk
-        lat_k = hw_o[..., None] * np.abs(np.cos(rel_k)) + hl_o[..., None] * np.abs(np.sin(rel_k))
-        lon_k = hl_o[..., None] * np.abs(np.cos(rel_k)) + hw_o[..., None] * np.abs(np.sin(rel_k))
-        tk = pred.traj_t[:, None, :]
+        # forecasts against the path (only slots that move in some variant are projected)
         mov = not_behind & ~pred.is_static
-        over = (mov[..., None] & pred.traj_valid[:, None, :]
-                & (tk <= p["overlap_check_horizon_s"][:, None, None])
-                & (np.abs(lk - offset_at(sk)) < hw_e + lat_k + c("lateral_safety_buffer_m")[..., None]
-                   + buf_vru[..., None])
-                & (sk + lon_k > (s0 - hl_e)[:, None, None]))
-        any_over = over.any(-1)
-        k_in = np.argmax(over, axis=-1)
+        cols = np.flatnonzero(mov.any(axis=0))
+        any_over = np.zeros((n, m), dtype=bool)
+        k_in = np.zeros((n, m), dtype=np.int64)
+        s_lo = np.full((n, m), np.inf)
+        s_hi = np.full((n, m), -np.inf)
+        if cols.size:
+            sub = (slice(None), cols)
+            _, sk, lk = project_on_reference(road, pred.traj_x[sub], pred.traj_y[sub])
+            ref_hk = road.ref_heading[road.ref_index(sk)]
+            head_k = np.where(tangent, pred.traj_heading[sub], pred.heading[sub][..., None])
+            rel_k = head_k - ref_hk
+            ca, sa = np.abs(np.cos(rel_k)), np.abs(np.sin(rel_k))
+            hw_s, hl_s = hw_o[sub][..., None], hl_o[sub][..., None]
+            lat_k = hw_s * ca + hl_s * sa
+            lon_k = hl_s * ca + hw_s * sa
+            tk = pred.traj_t[:, None, :]
+            over = (mov[sub][..., None] & pred.traj_valid[:, None, :]
+                    & (tk <= p["overlap_check_horizon_s"][:, None, None])
+                    & (np.abs(lk - offset_at(sk)) < hw_e + lat_k
+                       + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
+                    & (sk + lon_k > (s0 - hl_e)[:, None, None]))
+            any_over[sub] = over.any(-1)
+            k_in[sub] = np.argmax(over, axis=-1)
+            s_lo[sub] = np.min(np.where(over, sk - lon_k, np.inf), -1)
+            s_hi[sub] = np.max(np.where(over, sk + lon_k, -np.inf), -1)
         t_in = np.take_along_axis(pred.traj_t, k_in, axis=1)
-        s_lo = np.min(np.where(over, sk - lon_k, np.inf), -1) - c("st_longitudinal_buffer_m")
-        s_hi = np.max(np.where(over, sk + lon_k, -np.inf), -1) + c("st_longitudinal_buffer_m")
+        s_lo = s_lo - c("st_longitudinal_buffer_m")
+        s_hi = s_hi + c("st_longitudinal_buffer_m")
         behind_same_way = aligned & (so < s0[:, None])
         cross = any_over & ~follow & ~vru_stop & ~behind_same_way
         # time for the ego's rear to clear the region plus the margin, accelerating at
@@ -312,19 +323,20 @@ class Planning:
             a_cmd = a_new
             traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # --- decisions --------------------------------------------------------------------
-        decision = np.select([~(consider | mov), follow, yield_, overtake, vru_stop,
-                              blocking & ~no_path[:, None], blocking],
-                             [D_IGNORE, D_FOLLOW, D_YIELD, D_OVERTAKE, D_STOP, D_NUDGE, D_STOP],
-                             D_IGNORE)
-        decision_s = np.select([decision == D_FOLLOW, decision == D_YIELD,
-                                decision == D_OVERTAKE, decision == D_STOP],
-                               [gap_follow, stop_yield - s0[:, None], s_hi - s0[:, None],
-                                np.minimum(stop_vru, so - lon_ext) - s0[:, None]], 0.0)
+        w = np.where
+        decision = w(~(consider | mov), D_IGNORE, w(follow, D_FOLLOW, w(yield_, D_YIELD, w(
+            overtake, D_OVERTAKE, w(vru_stop, D_STOP, w(blocking, w(no_path[:, None], D_STOP,
+                                                                   D_NUDGE), D_IGNORE))))))
+        decision_s = w(decision == D_FOLLOW, gap_follow, w(
+            decision == D_YIELD, stop_yield - s0[:, None], w(
+                decision == D_OVERTAKE, s_hi - s0[:, None], w(
+                    decision == D_STOP, np.minimum(stop_vru, so - lon_ext) - s0[:, None], 0.0))))
         self.prev_decision = decision
         self.prev_track = pred.track_id
         standing = v0 < p["standstill_speed_mps"]
-        stopping = np.isin(reason, (R_DEST, R_LIGHT, R_YIELD, R_BLOCKED, R_VRU, R_FALLBACK)) & (
-            (a_cmd < 0) | standing)
+        stop_reason_now = ((reason == R_DEST) | (reason == R_LIGHT) | (reason == R_YIELD)
+                           | (reason == R_BLOCKED) | (reason == R_VRU) | (reason == R_FALLBACK))
+        stopping = stop_reason_now & ((a_cmd < 0) | standing)
         main = np.where(estop, M_ESTOP, np.where(stopping | (standing & (a_cmd <= 0)), M_STOP,
                                                  M_CRUISE))
         stop_distance = np.where(main == M_STOP, np.where(

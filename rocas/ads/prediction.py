@@ -119,7 +119,8 @@ class Prediction:
         cv_y = y[..., None] + np.sin(dir_)[..., None] * dist_k
         cv_h = np.broadcast_to(dir_[..., None], cv_x.shape)
         # lane follow
-        q, d2 = nearest_on(road.lane_points, road.lane_grid, x, y)
+        q, d2 = nearest_on(road.lane_grid, x, y)
+        q = np.minimum(q, road.lane_points.shape[0] - 1)
         lane_h = road.lane_point_heading[q]
         dh = np.abs(wrap_angle(dir_ - lane_h))
         bike = per.type == T_BICYCLE
@@ -157,9 +158,9 @@ class Prediction:
         ci_h = np.arctan2(np.sin(dir_)[..., None] * speed[..., None] + (lc * lat_v)[..., None],
                           np.cos(dir_)[..., None] * speed[..., None] - (ls * lat_v)[..., None])
         ci_h = np.broadcast_to(ci_h, cv_x.shape)
-        intent = np.select([is_static, cut_in, on_lane],
-                           [INTENT_STATIONARY, INTENT_CUT_IN, INTENT_LANE_FOLLOW],
-                           INTENT_CONSTANT_VELOCITY)
+        intent = np.where(is_static, INTENT_STATIONARY, np.where(
+            cut_in, INTENT_CUT_IN, np.where(on_lane, INTENT_LANE_FOLLOW,
+                                            INTENT_CONSTANT_VELOCITY)))
         sel_lf = (intent == INTENT_LANE_FOLLOW)[..., None]
         sel_ci = (intent == INTENT_CUT_IN)[..., None]
         tx = np.where(sel_lf, lf_x, np.where(sel_ci, ci_x, cv_x))

@@ -49,7 +49,7 @@ class Channel:
 
 CHANNELS: tuple[Channel, ...] = (
     Channel(TOPIC_POSE, localization_pb2.LocalizationEstimate, LOCALIZATION,
-            (PREDICTION, PLANNING, CONTROL), 0.05),
+            (PERCEPTION, PREDICTION, PLANNING, CONTROL), 0.05),
     Channel(TOPIC_CHASSIS, chassis_pb2.Chassis, CANBUS, (PLANNING, CONTROL), 0.05),
     Channel(TOPIC_OBSTACLES, perception_pb2.PerceptionObstacles, PERCEPTION, (PREDICTION,), 0.1),
     Channel(TOPIC_TRAFFIC_LIGHT, perception_pb2.TrafficLightDetection, PERCEPTION, (PLANNING,),

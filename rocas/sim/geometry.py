@@ -127,11 +127,16 @@ class NearestGrid:
     index ``num_points`` (callers pad their arrays with a far-away point there).
     """
 
-    def __init__(self, origin: np.ndarray, cell_m: float, candidates: np.ndarray) -> None:
+    def __init__(self, origin: np.ndarray, cell_m: float, candidates: np.ndarray,
+                 points: np.ndarray) -> None:
         self.origin = origin
         self.cell_m = cell_m
         self.candidates = candidates  # (GX, GY, K) int
         self.shape = candidates.shape[:2]
+        # the point set plus a far-away sentinel row (index num_points)
+        self.points = np.vstack([points, [[1e7, 1e7]]])
+        self.px = np.ascontiguousarray(self.points[:, 0])
+        self.py = np.ascontiguousarray(self.points[:, 1])
 
     @classmethod
     def build(cls, points: np.ndarray, cell_m: float, k: int, margin_m: float) -> NearestGrid:
@@ -151,7 +156,7 @@ class NearestGrid:
             idx = np.argpartition(d2, k_eff - 1, axis=1)[:, :k_eff]
             near = np.take_along_axis(d2, idx, 1) <= radius * radius
             cand[start:start + 1024, :k_eff] = np.where(near, idx, n)
-        return cls(lo, cell_m, cand.reshape(gx, gy, k))
+        return cls(lo, cell_m, cand.reshape(gx, gy, k), points)
 
     def query(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Candidate point indices near (x, y), shape (..., K)."""
@@ -160,14 +165,11 @@ class NearestGrid:
         return self.candidates[ix, iy]
 
 
-def nearest_on(points: np.ndarray, grid: NearestGrid, x: np.ndarray, y: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Index of the nearest point of ``points`` and the squared distance to it, for query
-    points of any shape (far queries land on the last point, at a large distance)."""
-    cand = np.minimum(grid.query(x, y), points.shape[0] - 1)
-    px = points[cand, 0]
-    py = points[cand, 1]
-    d2 = (px - x[..., None]) ** 2 + (py - y[..., None]) ** 2
+def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index of the grid's nearest point and the squared distance to it, for query points of
+    any shape (far queries get the sentinel index ``num_points`` at a huge distance)."""
+    cand = grid.query(x, y)
+    d2 = (grid.px[cand] - x[..., None]) ** 2 + (grid.py[cand] - y[..., None]) ** 2
     k = cand.shape[-1]
     c2 = cand.reshape(-1, k)
     d22 = d2.reshape(-1, k)

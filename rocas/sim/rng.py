@@ -36,6 +36,5 @@ def uniform(seeds: np.ndarray, tick: int, stream: int, shape: tuple[int, ...]) -
 
 def normal(seeds: np.ndarray, tick: int, stream: int, shape: tuple[int, ...]) -> np.ndarray:
     """Standard normal numbers, shape ``(N, *shape)`` (Box-Muller over two uniform streams)."""
-    u1 = uniform(seeds, tick, 2 * stream, shape)
-    u2 = uniform(seeds, tick, 2 * stream + 1, shape)
-    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
+    u = uniform(seeds, tick, stream, (2, *shape))
+    return np.sqrt(-2.0 * np.log(u[:, 0])) * np.cos(2.0 * np.pi * u[:, 1])

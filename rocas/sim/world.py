@@ -178,7 +178,7 @@ def road_geometry(lanes: tuple[Lane, ...], route: tuple[str, ...], start_s_m: fl
         lane_width=np.array([ln.width_m for ln in lanes]),
         lane_points=lane_points, lane_point_heading=lane_heading, lane_point_lane=lane_lane,
         lane_point_s=lane_s, chain_points=chain_pts, chain_heading=chain_heading,
-        lane_grid=lane_grid, ref_grid=NearestGrid.build(ref, 2.0, 8, 12.0),
+        lane_grid=lane_grid, ref_grid=NearestGrid.build(ref, 1.0, 4, 12.0),
         ref_lane_s=ref_lane_s,
         ref_points=ref, ref_heading=ref_heading, ref_kappa=ref_kappa, ref_speed_limit=ref_limit,
         ref_junction=ref_junction, ref_lane=ref_lane, ref_half_width=ref_half_width,
@@ -421,7 +421,8 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     """
     from rocas.sim.geometry import nearest_on
 
-    idx, _ = nearest_on(road.ref_points, road.ref_grid, x, y)
+    idx, _ = nearest_on(road.ref_grid, x, y)
+    idx = np.minimum(idx, road.ref_points.shape[0] - 1)
     rx = road.ref_points[idx, 0]
     ry = road.ref_points[idx, 1]
     h = road.ref_heading[idx]

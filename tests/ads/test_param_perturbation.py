@@ -18,6 +18,7 @@ CASES = (
     ("foggy_crossing", {}),
     ("junction_straight", {"prediction.cyclist_cut_in_lateral_m": 5.0}),
     ("left_turn_oncoming", {"control.lateral_controller": 1.0}),
+    ("junction_straight", {"perception.glare_sun_altitude_deg": 60.0}),  # sun in the camera
 )
 
 
