@@ -31,14 +31,15 @@ class ControlOutput:
     speed_error: np.ndarray
 
 
-def _interp_rows(xq: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
-    """Row-wise linear interpolation: xq (N,), xp/fp (N, K) with xp increasing per row."""
+def _interp_rows(xq: np.ndarray, xp: np.ndarray, *fps: np.ndarray) -> list[np.ndarray]:
+    """Row-wise linear interpolation of several tables: xq (N,), xp and each fp (N, K), xp
+    increasing per row."""
     k = xp.shape[1]
     i = clip((xp <= xq[:, None]).sum(axis=1) - 1, 0, k - 2)
     r = np.arange(xp.shape[0])
     x0, x1 = xp[r, i], xp[r, i + 1]
     u = clip((xq - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
-    return fp[r, i] + u * (fp[r, i + 1] - fp[r, i])
+    return [fp[r, i] + u * (fp[r, i + 1] - fp[r, i]) for fp in fps]
 
 
 class Control:
@@ -69,9 +70,8 @@ class Control:
         # longitudinal
         tq = now_s - plan_time_s + p["preview_time_s"]
         t_rows = np.where(plan.valid, plan.t, plan.t[:, :1] + 1e3 + plan.t)
-        v_ref = _interp_rows(tq, t_rows, plan.v)
-        a_ref = _interp_rows(tq, t_rows, plan.a)
-        s_ref = _interp_rows(np.full(n, now_s - plan_time_s), t_rows, plan.s)
+        v_ref, a_ref = _interp_rows(tq, t_rows, plan.v, plan.a)
+        (s_ref,) = _interp_rows(np.full(n, now_s - plan_time_s), t_rows, plan.s)
         speed = chassis.speed
         ev = v_ref - speed
         es = s_ref - s_match
@@ -98,8 +98,7 @@ class Control:
         look = np.maximum(p["pure_pursuit_min_lookahead_m"],
                           p["pure_pursuit_lookahead_gain_s"] * speed)
         s_rows = np.where(plan.valid, plan.s, plan.s[:, -1:] + 1e3 + plan.t)
-        tx = _interp_rows(s_match + look, s_rows, plan.x)
-        ty = _interp_rows(s_match + look, s_rows, plan.y)
+        tx, ty = _interp_rows(s_match + look, s_rows, plan.x, plan.y)
         alpha = wrap_angle(np.arctan2(ty - loc.y, tx - loc.x) - loc.heading)
         delta_pp = np.arctan2(2.0 * wb * np.sin(alpha), look)
         kappa = plan.kappa[r, i]

@@ -101,24 +101,8 @@ class Prediction:
         k = np.arange(1, MAX_POINTS + 1)
         t = k[None, :] * p["time_step_s"][:, None]  # (N, K)
         valid = t <= p["horizon_s"][:, None] + 1e-9
-        # longitudinal motion with a fading acceleration
-        along = np.where(speed > 0.05, (ax * vx + ay * vy) / np.maximum(speed, 1e-6), 0.0)
-        acc = clip(along, -p["max_accel_mps2"][:, None], p["max_accel_mps2"][:, None])
-        tau = p["accel_decay_s"][:, None, None]
-        tt = t[:, None, :]
-        vmax = np.where(ped, p["pedestrian_max_speed_mps"][:, None], p["max_speed_mps"][:, None])
-        v0 = np.minimum(speed, vmax)
-        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - np.exp(-tt / tau)), 0.0,
-                      vmax[..., None])
-        dt_k = p["time_step_s"][:, None, None]
-        dist_k = np.cumsum(0.5 * (v_k + np.concatenate([v0[..., None], v_k[..., :-1]], -1))
-                           * dt_k, axis=-1)
-        # constant velocity
         dir_ = np.where(speed > 0.05, np.arctan2(vy, vx), heading)
-        cv_x = x[..., None] + np.cos(dir_)[..., None] * dist_k
-        cv_y = y[..., None] + np.sin(dir_)[..., None] * dist_k
-        cv_h = np.broadcast_to(dir_[..., None], cv_x.shape)
-        # lane follow
+        # lane matching and intents, for every slot
         q, d2 = nearest_on(road.lane_grid, x, y)
         q = np.minimum(q, road.lane_points.shape[0] - 1)
         lane_h = road.lane_point_heading[q]
@@ -129,14 +113,72 @@ class Prediction:
                    & (dh <= np.deg2rad(p["lane_follow_max_heading_deg"])[:, None])
                    & (per.tracking_time >= p["min_tracking_time_s"][:, None])
                    & ~ped)
+        # cyclist cut-in beside the ego: moves across the ego's path
+        cut_in = (bike & (np.abs(rel_x) <= p["cyclist_cut_in_longitudinal_m"][:, None])
+                  & (np.abs(rel_y) <= p["cyclist_cut_in_lateral_m"][:, None]) & ~is_static)
+        intent = np.where(is_static, INTENT_STATIONARY, np.where(
+            cut_in, INTENT_CUT_IN, np.where(on_lane, INTENT_LANE_FOLLOW,
+                                            INTENT_CONSTANT_VELOCITY)))
+        # trajectories: static obstacles stay put; only slots moving in some variant are
+        # forecast (the others' values would be discarded)
+        kk = t.shape[1]
+        traj_x = np.repeat(x[..., None], kk, axis=-1)
+        traj_y = np.repeat(y[..., None], kk, axis=-1)
+        traj_h = np.repeat(heading[..., None], kk, axis=-1)
+        traj_v = np.zeros((n, m, kk))
+        cols = np.flatnonzero((per.published & ~is_static).any(axis=0))
+        if cols.size:
+            sub = (slice(None), cols)
+            tx, ty, th, tv = self._forecast(
+                p, t, x[sub], y[sub], vx[sub], vy[sub], ax[sub], ay[sub], speed[sub],
+                dir_[sub], ped[sub], bike[sub], q[sub], lane_h[sub], rel_y[sub], lc, ls,
+                intent[sub])
+            st = is_static[sub][..., None]
+            traj_x[sub] = np.where(st, traj_x[sub], tx)
+            traj_y[sub] = np.where(st, traj_y[sub], ty)
+            traj_h[sub] = np.where(st, traj_h[sub], th)
+            traj_v[sub] = np.where(st, 0.0, tv)
+        return PredictionOutput(
+            published=per.published, x=x, y=y, heading=heading, vx=vx, vy=vy, speed=speed,
+            length=per.length, width=per.width, type=per.type, track_id=per.track_id,
+            is_static=is_static, intent=intent,
+            traj_x=traj_x, traj_y=traj_y, traj_heading=traj_h, traj_v=traj_v,
+            traj_t=t, traj_valid=valid, probability=p["trajectory_probability"],
+            horizon=p["horizon_s"], perception=per,
+        )
+
+    def _forecast(self, p: dict[str, np.ndarray], t: np.ndarray, x: np.ndarray, y: np.ndarray,
+                  vx: np.ndarray, vy: np.ndarray, ax: np.ndarray, ay: np.ndarray,
+                  speed: np.ndarray, dir_: np.ndarray, ped: np.ndarray, bike: np.ndarray,
+                  q: np.ndarray, lane_h: np.ndarray, rel_y: np.ndarray, lc: np.ndarray,
+                  ls: np.ndarray, intent: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Trajectories (N, S, K) x, y, heading, speed for S obstacle slots."""
+        road = self.world.road
+        # longitudinal motion with a fading acceleration
+        along = np.where(speed > 0.05, (ax * vx + ay * vy) / np.maximum(speed, 1e-6), 0.0)
+        acc = clip(along, -p["max_accel_mps2"][:, None], p["max_accel_mps2"][:, None])
+        tau = p["accel_decay_s"][:, None, None]
+        tt = t[:, None, :]
+        vmax = np.where(ped, p["pedestrian_max_speed_mps"][:, None], p["max_speed_mps"][:, None])
+        v0 = np.minimum(speed, vmax)
+        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - np.exp(-tt / tau)), 0.0,
+                   vmax[..., None])
+        dt_k = p["time_step_s"][:, None, None]
+        dist_k = np.cumsum(0.5 * (v_k + np.concatenate([v0[..., None], v_k[..., :-1]], -1))
+                           * dt_k, axis=-1)
+        # constant velocity
+        cdir, sdir = np.cos(dir_)[..., None], np.sin(dir_)[..., None]
+        cv_x = x[..., None] + cdir * dist_k
+        cv_y = y[..., None] + sdir * dist_k
+        # lane follow along the matched lane and its first successors
         lane = road.lane_point_lane[q]
-        s0 = road.lane_point_s[q]
         cmax = road.chain_points.shape[1] - 1
-        pos = clip(s0[..., None] + dist_k, 0, cmax - 1e-6)
+        pos = clip(road.lane_point_s[q][..., None] + dist_k, 0, cmax - 1e-6)
         i = pos.astype(np.int64)
         u = pos - i
         li = lane[..., None]
-        p0 = road.chain_points[li, i]  # (N, M, K, 2)
+        p0 = road.chain_points[li, i]  # (N, S, K, 2)
         p1 = road.chain_points[li, i + 1]
         lf_h = road.chain_heading[li, i]
         offx = x - road.lane_points[q, 0]
@@ -147,32 +189,15 @@ class Prediction:
             -tt / p["lane_follow_convergence_s"][:, None, None]))
         lf_x = p0[..., 0] + u * (p1[..., 0] - p0[..., 0]) - lat * np.sin(lf_h)
         lf_y = p0[..., 1] + u * (p1[..., 1] - p0[..., 1]) + lat * np.cos(lf_h)
-        # cyclist cut-in beside the ego: moves across the ego's path
-        cut_in = ((per.type == T_BICYCLE) & (np.abs(rel_x) <= p["cyclist_cut_in_longitudinal_m"]
-                                             [:, None])
-                  & (np.abs(rel_y) <= p["cyclist_cut_in_lateral_m"][:, None]) & ~is_static)
-        side = -np.sign(rel_y)
-        lat_v = p["cyclist_cut_in_lateral_speed_mps"][:, None] * side  # toward and across
+        # cut-in: forward motion plus a lateral motion toward and across the ego's path
+        lat_v = p["cyclist_cut_in_lateral_speed_mps"][:, None] * -np.sign(rel_y)
         ci_x = cv_x + (-ls * lat_v)[..., None] * tt
         ci_y = cv_y + (lc * lat_v)[..., None] * tt
-        ci_h = np.arctan2(np.sin(dir_)[..., None] * speed[..., None] + (lc * lat_v)[..., None],
-                          np.cos(dir_)[..., None] * speed[..., None] - (ls * lat_v)[..., None])
-        ci_h = np.broadcast_to(ci_h, cv_x.shape)
-        intent = np.where(is_static, INTENT_STATIONARY, np.where(
-            cut_in, INTENT_CUT_IN, np.where(on_lane, INTENT_LANE_FOLLOW,
-                                            INTENT_CONSTANT_VELOCITY)))
+        ci_h = np.arctan2(sdir * speed[..., None] + (lc * lat_v)[..., None],
+                          cdir * speed[..., None] - (ls * lat_v)[..., None])
         sel_lf = (intent == INTENT_LANE_FOLLOW)[..., None]
         sel_ci = (intent == INTENT_CUT_IN)[..., None]
         tx = np.where(sel_lf, lf_x, np.where(sel_ci, ci_x, cv_x))
         ty = np.where(sel_lf, lf_y, np.where(sel_ci, ci_y, cv_y))
-        th = np.where(sel_lf, lf_h, np.where(sel_ci, ci_h, cv_h))
-        st = is_static[..., None]
-        return PredictionOutput(
-            published=per.published, x=x, y=y, heading=heading, vx=vx, vy=vy, speed=speed,
-            length=per.length, width=per.width, type=per.type, track_id=per.track_id,
-            is_static=is_static, intent=intent,
-            traj_x=np.where(st, x[..., None], tx), traj_y=np.where(st, y[..., None], ty),
-            traj_heading=np.where(st, heading[..., None], th), traj_v=np.where(st, 0.0, v_k),
-            traj_t=t, traj_valid=valid, probability=p["trajectory_probability"],
-            horizon=p["horizon_s"], perception=per,
-        )
+        th = np.where(sel_lf, lf_h, np.where(sel_ci, ci_h, dir_[..., None]))
+        return tx, ty, th, v_k

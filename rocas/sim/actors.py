@@ -10,8 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rocas.sim.dynamics import LATERAL_GRIP_FACTOR, VehicleState, bicycle_step, path_point, \
-    profile_speed
+from rocas.sim.dynamics import (
+    LATERAL_GRIP_FACTOR,
+    VehicleState,
+    bicycle_step,
+    path_point,
+    profile_speed,
+)
 from rocas.sim.geometry import clip, wrap_angle
 from rocas.sim.world import KIND_VEHICLE, BatchWorld
 
@@ -19,7 +24,7 @@ ACTOR_ACCEL_MPS2 = 2.5       # [m/s^2] largest acceleration of actors
 ACTOR_DECEL_MPS2 = 6.0       # [m/s^2] largest deceleration of actors
 SPEED_GAIN_PER_S = 1.5       # [1/s] speed-tracking gain
 REACTIVE_HEADWAY_S = 1.2     # [s]
-PROJECTION_WINDOW = np.arange(-4, 13)
+PROJECTION_WINDOW = np.arange(-2, 7)  # samples around the last match (0.5 m apart)
 
 
 @dataclass(frozen=True, eq=False)

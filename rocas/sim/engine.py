@@ -106,9 +106,11 @@ def _run(world: BatchWorld, scenario: Scenario, param_sets: Sequence[ParamSet], 
     oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), reason)
 
     def record(i: int) -> None:
-        ego_tr[:, i] = np.stack([ego.x, ego.y, ego.yaw, ego.speed, accel], -1)
+        for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
+            ego_tr[:, i, j] = a
         b = actors.body
-        act_tr[:, i] = np.stack([b.x, b.y, b.yaw, b.speed], -1)
+        for j, a in enumerate((b.x, b.y, b.yaw, b.speed)):
+            act_tr[:, i, :, j] = a
         gap_tr[:, i] = oracles.last_gap
 
     record(0)

@@ -160,8 +160,8 @@ class NearestGrid:
 
     def query(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Candidate point indices near (x, y), shape (..., K)."""
-        ix = np.clip(((x - self.origin[0]) / self.cell_m).astype(np.int64), 0, self.shape[0] - 1)
-        iy = np.clip(((y - self.origin[1]) / self.cell_m).astype(np.int64), 0, self.shape[1] - 1)
+        ix = clip(((x - self.origin[0]) / self.cell_m).astype(np.int64), 0, self.shape[0] - 1)
+        iy = clip(((y - self.origin[1]) / self.cell_m).astype(np.int64), 0, self.shape[1] - 1)
         return self.candidates[ix, iy]
 
 

@@ -99,17 +99,19 @@ class Oracles:
         self.start_s = start_s
         self.progress = np.zeros(n)
         self.last_gap = np.full(n, np.inf)
+        self.half_length = np.concatenate([world.actor_dims[..., 0], world.object_dims[..., 0]], 1) / 2
+        self.half_width = np.concatenate([world.actor_dims[..., 1], world.object_dims[..., 1]], 1) / 2
 
     def update(self, tick: int, ego: VehicleState, accel: np.ndarray, actors: VehicleState,
                estop: np.ndarray, reason: np.ndarray) -> None:
         w = self.world
         hl, hw = w.ego_dims[0] / 2, w.ego_dims[1] / 2
         ex, ey, eyaw = ego.x[:, None], ego.y[:, None], ego.yaw[:, None]
-        gap_a = box_gap(ex, ey, eyaw, hl, hw, actors.x, actors.y, actors.yaw,
-                        w.actor_dims[..., 0] / 2, w.actor_dims[..., 1] / 2)
-        gap_o = box_gap(ex, ey, eyaw, hl, hw, w.object_pos[..., 0], w.object_pos[..., 1],
-                        w.object_yaw, w.object_dims[..., 0] / 2, w.object_dims[..., 1] / 2)
-        gaps = np.concatenate([gap_a, gap_o], axis=1)
+        na = actors.x.shape[1]
+        cat = np.concatenate
+        gaps = box_gap(ex, ey, eyaw, hl, hw, cat([actors.x, w.object_pos[..., 0]], 1),
+                       cat([actors.y, w.object_pos[..., 1]], 1), cat([actors.yaw, w.object_yaw], 1),
+                       self.half_length, self.half_width)
         n = ego.x.shape[0]
         if gaps.shape[1]:
             g = gaps.min(axis=1)
@@ -120,8 +122,8 @@ class Oracles:
         self.last_gap = g
         self.min_sep = np.minimum(self.min_sep, g)
         hit = g < 0.0
-        kind = np.where(j < gap_a.shape[1], COLLIDER_ACTOR, COLLIDER_OBJECT)
-        index = np.where(j < gap_a.shape[1], j, j - gap_a.shape[1])
+        kind = np.where(j < na, COLLIDER_ACTOR, COLLIDER_OBJECT)
+        index = np.where(j < na, j, j - na)
         if w.area_edges.shape[0]:
             corners = box_corners(ego.x, ego.y, ego.yaw, hl, hw)  # (N, 4, 2)
             inside = points_in_polygons(corners[..., 0], corners[..., 1], w.area_edges,
