@@ -92,3 +92,15 @@ def test_bad_toml_and_missing_file(tmp_path):
         load_scenario(_write(tmp_path, "[scenario"))
     with pytest.raises(ScenarioError, match="cannot read"):
         load_scenario(tmp_path / "missing.toml")
+
+
+def test_roundabout_is_expressible_and_a9_depends_on_the_brake_threshold():
+    from rocas.sim.engine import simulate_batch
+
+    s = load_example("roundabout_red_truck")
+    ring = ["ring_se", "ring_ne", "ring_nw", "ring_sw"]
+    lanes = s.lane_by_id
+    for a, b in zip(ring, ring[1:] + ring[:1], strict=True):
+        assert b in lanes[a].successors  # a closed cycle of lanes
+    res = simulate_batch(s, params=[None, {"perception.brake_threshold": 0.99}])
+    assert res.outcomes[0].estop and not res.outcomes[1].estop
