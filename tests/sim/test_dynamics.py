@@ -59,3 +59,24 @@ def test_counter_rng_is_independent_of_batch_composition():
     assert np.array_equal(a[0], b[1])
     assert not np.array_equal(b[0], b[1])
     assert abs(rng.normal(np.arange(2000, dtype=np.uint64), 0, 0, ()).std() - 1.0) < 0.1
+
+
+def test_case_study_truck_heading_departs_from_its_path_tangent_more_when_wet():
+    import dataclasses
+
+    from rocas.scenarios import load_example
+    from rocas.sim.engine import simulate_batch
+
+    s = load_example("wet_truck_turn")
+    dry = dataclasses.replace(s, weather=dataclasses.replace(s.weather, precipitation=0.0))
+    res = simulate_batch([s, dry])
+    i = res.actor_ids.index("turning_truck")
+    slips = []
+    for v in range(2):
+        tr = res.actors[v, :, i]
+        d = np.diff(tr[:, :2], axis=0)
+        tangent = np.arctan2(d[:, 1], d[:, 0])
+        moving = tr[1:, 3] > 1.0
+        slips.append(np.abs(wrap_angle(tr[1:, 2] - tangent))[moving].max())
+    assert slips[0] > np.deg2rad(25)
+    assert slips[0] > slips[1] + np.deg2rad(10)
