@@ -41,7 +41,8 @@ class ChangePointConfig:
         penalty_scale: multiplier of the noise-derived penalty (dimensionless).
         noise_floor: smallest baseline standard deviation assumed [MDR units].
         penalty: fixed penalty; None derives it from the baseline.
-        min_size: fewest bins in a segment.
+        min_size: fewest bins in a segment (1: a one-bin ramp step does not pull the change
+            point a bin early; impulses are the median filter's job).
         smooth_bins: width of the running median applied first (odd; 1 = none).
     """
 
@@ -49,19 +50,23 @@ class ChangePointConfig:
     penalty_scale: float = 3.0
     noise_floor: float = 0.002
     penalty: float | None = None
-    min_size: int = 2
+    min_size: int = 1
     smooth_bins: int = 5
 
 
 def median_filter(values: np.ndarray, width: int) -> np.ndarray:
-    """Running median of ``values`` (shape (n,)) over ``width`` samples, edges held."""
+    """Running median of ``values`` (shape (n,)) over ``width`` samples.
+
+    Windows are truncated at the ends (not padded with the end value, which would keep an
+    impulse in the first or last bin alive).
+    """
     if width <= 1 or len(values) < 3:
         return values
     width = width + 1 - width % 2  # odd
     half = width // 2
-    padded = np.concatenate([np.full(half, values[0]), values, np.full(half, values[-1])])
+    padded = np.concatenate([np.full(half, np.nan), values, np.full(half, np.nan)])
     windows = np.lib.stride_tricks.sliding_window_view(padded, width)
-    return np.median(windows, axis=1)
+    return np.nanmedian(windows, axis=1)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,9 @@
 2. Every edge (u, v) is removed unless t*(u) lies in [t*(v) - delta, t*(v)]; an edge
    with an undefined t* on either end is removed.
 3. From the control channel, walk the reversed graph; the deviating module is the
-   reachable module with the earliest t* (ties broken by name, for determinism).
+   reachable module with the earliest t*. Ties (modules whose change points fall into the
+   same bin, as when a whole pipeline reacts within one tick) go to the module farthest
+   upstream along the walk, since deviations travel downstream; then by name.
 """
 
 from __future__ import annotations
@@ -104,8 +106,13 @@ def find_initial_module(
     reversed_g = pruned.reverse(copy=False)
     reach_nodes = nx.descendants(reversed_g, start) if start in reversed_g else set()
     reachable = frozenset(n for k, n in reach_nodes if k == MODULE)
-    candidates = [(t_star[(MODULE, m)], m) for m in reachable if t_star[(MODULE, m)] is not None]
-    deviating = min(candidates)[1] if candidates else None
+    depth = nx.single_source_shortest_path_length(reversed_g, start) if start in reversed_g else {}
+    candidates = [
+        (t_star[(MODULE, m)], -depth.get((MODULE, m), 0), m)
+        for m in reachable
+        if t_star[(MODULE, m)] is not None
+    ]
+    deviating = min(candidates)[2] if candidates else None
 
     path: tuple[str, ...] = ()
     if deviating is not None:

@@ -64,3 +64,12 @@ def test_edge_window_is_inclusive():
 @pytest.mark.parametrize("order", [list(APPENDIX_A), list(reversed(APPENDIX_A))])
 def test_result_does_not_depend_on_input_order(order):
     assert _run({k: APPENDIX_A[k] for k in order}).deviating_module == "prediction"
+
+
+def test_same_bin_ties_go_to_the_module_farthest_upstream():
+    # a whole pipeline reacting within one simulator tick: all change points in one bin
+    tied = {"/apollo/prediction": 7.0, "/apollo/planning": 7.0, "/apollo/control": 7.0,
+            "/apollo/canbus/chassis": None, "/apollo/perception/obstacles": None}
+    r = _run(tied)
+    assert r.deviating_module == "prediction"
+    assert r.path[-1] == "prediction"
