@@ -1,0 +1,66 @@
+"""Replay: a recording -> the scenario it came from -> the same accident again.
+
+``rocas.replay`` is this package *and* callable: ``rocas.replay("accident.mcap")`` returns the
+reconstructed :class:`~rocas.scenarios.Scenario` (what the search phases mutate). The pieces:
+
+- :mod:`~rocas.replay.frames`: ego-frame <-> world transforms;
+- :mod:`~rocas.replay.source`: what a recording tells (world attachment, ego metadata and
+  pose, perception obstacles in world coordinates, the recorded outcome);
+- :mod:`~rocas.replay.tracks`: stitched, gap-bridged, smoothed obstacle tracks with their
+  kind, model and colour;
+- :mod:`~rocas.replay.lanes` and :mod:`~rocas.replay.paths`: tracks -> actors (waypoints
+  extended along the map, a speed profile designed for the simulator's actor model);
+- :mod:`~rocas.replay.reconstruct`: :func:`reconstruct` -> :class:`Reconstruction`;
+- :mod:`~rocas.replay.run`: :func:`replay` -> :class:`ReplayReport` (closed loop, fidelity).
+
+Heavy modules load on first use, so ``import rocas`` stays cheap.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rocas.replay.reconstruct import AccidentInfo, Reconstruction, reconstruct
+    from rocas.replay.run import ReplayReport, replay
+    from rocas.scenarios.model import Scenario
+
+_LAZY = {
+    "AccidentInfo": "rocas.replay.reconstruct",
+    "Reconstruction": "rocas.replay.reconstruct",
+    "reconstruct": "rocas.replay.reconstruct",
+    "ReplayReport": "rocas.replay.run",
+    "replay": "rocas.replay.run",
+    "TIME_TOLERANCE_S": "rocas.replay.run",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _CallableModule(types.ModuleType):
+    """``rocas.replay(path)`` -> the reconstructed Scenario."""
+
+    def __call__(self, path: str | os.PathLike[str]) -> Scenario:
+        from rocas.replay.reconstruct import reconstruct
+
+        return reconstruct(path).scenario
+
+
+sys.modules[__name__].__class__ = _CallableModule
+
+__all__ = ["AccidentInfo", "Reconstruction", "ReplayReport", "TIME_TOLERANCE_S", "reconstruct",
+           "replay"]

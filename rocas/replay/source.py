@@ -1,0 +1,175 @@
+"""Read what replay needs from a recording: the static world, the ego's mission and pose
+series, the perception obstacles (converted to world coordinates) and the recorded outcome.
+
+One streaming pass over ``/localization/pose`` and ``/perception/obstacles`` plus one pass for
+the attachment; nothing else is decoded.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rocas.ads.topics import (
+    EGO_METADATA,
+    RUN_METADATA,
+    TOPIC_OBSTACLES,
+    TOPIC_POSE,
+    WORLD_ATTACHMENT,
+)
+from rocas.errors import RecordingError
+from rocas.recording.reader import open_recording
+from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
+
+_NS = 1e-9
+#: PerceptionObstacle.Type codes (perception.proto).
+TYPE_UNKNOWN_MOVABLE, TYPE_UNKNOWN_UNMOVABLE, TYPE_PEDESTRIAN, TYPE_BICYCLE, TYPE_VEHICLE = (
+    1, 2, 3, 4, 5)
+
+
+@dataclass(frozen=True, eq=False)
+class Detections:
+    """Every published perception obstacle of a recording in world coordinates, K rows.
+
+    Attributes:
+        times: (K,) message time [s].
+        track_id: (K,) perception track id.
+        xy: (K, 2) centre [m]; heading: (K,) [rad]; velocity: (K, 2) [m/s] (world axes).
+        size: (K, 3) length, width, height [m].
+        type, sub_type: (K,) PerceptionObstacle enum codes.
+        color: K colour names ("unknown" when not recognised).
+    """
+
+    times: np.ndarray
+    track_id: np.ndarray
+    xy: np.ndarray
+    heading: np.ndarray
+    velocity: np.ndarray
+    size: np.ndarray
+    type: np.ndarray
+    sub_type: np.ndarray
+    color: tuple[str, ...]
+
+    def __len__(self) -> int:
+        return int(self.times.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class RecordedRun:
+    """What a recording tells replay.
+
+    Attributes:
+        path: the recording.
+        world: the ``rocas/world.json`` attachment (scenario format, no actors, no ego).
+        ego_meta: the ``rocas.ego`` metadata record, or None.
+        run_meta: the ``rocas.run`` outcome record, or None.
+        ego_times: (T,) pose times [s]; ego_track: (T, 5) x, y, yaw, speed, acceleration.
+        ego_lanes: T matched lane ids ("" when unmatched).
+        detections: the perception obstacles.
+        perception_period_s: median time between perception frames [s].
+    """
+
+    path: str
+    world: dict[str, Any]
+    ego_meta: dict[str, str] | None
+    run_meta: dict[str, str] | None
+    ego_times: np.ndarray
+    ego_track: np.ndarray
+    ego_lanes: tuple[str, ...]
+    detections: Detections
+    perception_period_s: float
+
+
+def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
+    """Read a recording made by rocas (or any stack writing the same channels + attachment).
+
+    Raises:
+        RecordingError: the file lacks the world attachment, the pose or the obstacle channel.
+    """
+    path = str(path)
+    if not Path(path).is_file():
+        raise RecordingError(f"{path}: no such file")
+    rec = open_recording(path)
+    pose_rows: list[tuple[float, ...]] = []
+    lanes: list[str] = []
+    frames: list[tuple[float, Any, tuple[float, float, float] | None]] = []
+    for m in rec.decoded({TOPIC_POSE, TOPIC_OBSTACLES}):
+        t = m.log_time_ns * _NS
+        msg = m.message
+        if m.channel.topic == TOPIC_POSE:
+            p = msg.pose
+            vx, vy = p.linear_velocity.x, p.linear_velocity.y
+            h = p.heading
+            pose_rows.append((t, p.position.x, p.position.y, h, float(np.hypot(vx, vy)),
+                              p.linear_acceleration.x * np.cos(h)
+                              + p.linear_acceleration.y * np.sin(h)))
+            lanes.append(getattr(msg, "lane_id", ""))
+        else:
+            embedded = None
+            if msg.HasField("ego_position"):
+                embedded = (msg.ego_position.x, msg.ego_position.y, msg.ego_heading)
+            frames.append((t, list(msg.perception_obstacle), embedded))
+    topics = rec.topics()
+    missing = [t for t in (TOPIC_POSE, TOPIC_OBSTACLES) if t not in topics]
+    if missing:
+        raise RecordingError(
+            f"{path}: replay needs channel(s) {', '.join(missing)}, which the recording lacks",
+            "replay rebuilds the ego from /localization/pose and every other actor from "
+            "/perception/obstacles")
+    if not pose_rows:
+        raise RecordingError(f"{path}: no decodable message on {TOPIC_POSE}",
+                             "the ego's pose series is what replay transforms obstacles with")
+    world_bytes = rec.attachment(WORLD_ATTACHMENT)
+    if world_bytes is None:
+        raise RecordingError(
+            f"{path}: no {WORLD_ATTACHMENT} attachment (the static world: map, entities, weather)",
+            "replay needs it; recordings made by 'rocas simulate' carry it, "
+            "'rocas annotate' does not add it")
+    try:
+        world = json.loads(world_bytes)
+    except ValueError as exc:
+        raise RecordingError(f"{path}: {WORLD_ATTACHMENT} is not valid JSON ({exc})") from exc
+    meta = dict(rec.metadata)
+    pose = np.asarray(pose_rows, dtype=np.float64)
+    order = np.argsort(pose[:, 0], kind="stable")
+    pose, lanes = pose[order], [lanes[i] for i in order]
+    ego_times = pose[:, 0]
+    detections = _detections(frames, ego_times, pose[:, 1:4])
+    ftimes = np.array([f[0] for f in frames])
+    period = float(np.median(np.diff(ftimes))) if len(ftimes) > 1 else 0.1
+    return RecordedRun(path=path, world=world, ego_meta=meta.get(EGO_METADATA),
+                       run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
+                       ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
+                       perception_period_s=period if period > 0 else 0.1)
+
+
+def _detections(frames: list[tuple[float, Any, tuple[float, float, float] | None]],
+                pose_times: np.ndarray, pose: np.ndarray) -> Detections:
+    """Obstacles of every frame, transformed with the ego pose the frame refers to: the
+    pose embedded in the message when present, else the pose channel interpolated."""
+    rows: list[tuple[float, ...]] = []
+    colors: list[str] = []
+    for t, obstacles, embedded in frames:
+        if not obstacles:
+            continue
+        ex, ey, eh = embedded if embedded is not None else interpolate_pose(
+            pose_times, pose, np.array([t]))[0]
+        for o in obstacles:
+            wx, wy = ego_to_world(ex, ey, eh, o.position.x, o.position.y)
+            vx, vy = ego_vector_to_world(eh, o.velocity.x, o.velocity.y)
+            rows.append((t, o.id, wx, wy, float(wrap(eh + o.theta)), vx, vy, o.length, o.width,
+                         o.height, o.type, o.sub_type))
+            colors.append(o.color or "unknown")
+    a = np.asarray(rows, dtype=np.float64).reshape(-1, 12)
+    return Detections(times=a[:, 0], track_id=a[:, 1].astype(np.int64), xy=a[:, 2:4],
+                      heading=a[:, 4], velocity=a[:, 5:7], size=a[:, 7:10],
+                      type=a[:, 10].astype(np.int64), sub_type=a[:, 11].astype(np.int64),
+                      color=tuple(colors))
+
+
+__all__ = ["Detections", "RecordedRun", "read_recording"]

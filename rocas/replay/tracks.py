@@ -1,0 +1,284 @@
+"""Obstacle tracks from perception: stitching id switches and dropped tracks, bridging gaps,
+smoothing, and mapping perceived type/sub-type/colour back to scenario actor kinds.
+
+A perception tracker switches ids when its association gate is violated and drops a track
+after a few missed frames (occlusion, range); both split one physical actor into several
+track ids. :func:`build_tracks` links such pieces when the later one starts where the earlier
+one, extrapolated at its last velocity, would be, then resamples the chain on a uniform grid
+(Hermite bridges over gaps) and smooths it with a local linear Gaussian regression.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.replay.frames import wrap
+from rocas.replay.source import (
+    TYPE_BICYCLE,
+    TYPE_PEDESTRIAN,
+    TYPE_UNKNOWN_UNMOVABLE,
+    TYPE_VEHICLE,
+    Detections,
+)
+from rocas.scenarios.model import COLORS
+
+MAX_GAP_S = 2.5             # [s] longest gap between two pieces of one actor that is bridged
+STITCH_GATE_M = 2.0         # [m] distance gate at zero gap ...
+STITCH_GATE_PER_S = 1.5     # [m/s] ... growing with the gap
+SMOOTH_SIGMA_S = 0.25       # [s] Gaussian kernel of the smoother
+MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurious
+MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
+DEFAULT_COLOR = "white"     # used when the colour was never recognised
+
+#: PerceptionObstacle.SubType -> (kind, model).
+SUB_TYPES: dict[int, tuple[str, str]] = {
+    1: ("vehicle", "sedan"), 2: ("vehicle", "suv"), 3: ("vehicle", "truck"),
+    4: ("vehicle", "bus"), 5: ("cyclist", "sedan"), 6: ("pedestrian", "sedan"),
+}
+_TYPE_KIND = {TYPE_VEHICLE: "vehicle", TYPE_BICYCLE: "cyclist", TYPE_PEDESTRIAN: "pedestrian"}
+_STATIC_SUB_TYPES = (7, 8)  # traffic cone, box: map entities, replayed from the world
+
+
+@dataclass(frozen=True, eq=False)
+class Track:
+    """One physical obstacle reconstructed from perception, on a uniform time grid.
+
+    Attributes:
+        track_ids: perception track ids stitched into this track, in time order.
+        times: (n,) grid times [s], one perception period apart.
+        xy: (n, 2) smoothed world position [m].
+        heading: (n,) world heading [rad] (velocity direction when moving).
+        speed: (n,) speed along the trajectory [m/s].
+        observed: (n,) True where a detection fell on the grid sample (False: bridged).
+        kind, model, color: scenario actor kind, vehicle model, colour name.
+        size: (3,) median perceived length, width, height [m].
+        notes: what was assumed (unknown colour, class from size, ...).
+    """
+
+    track_ids: tuple[int, ...]
+    times: np.ndarray
+    xy: np.ndarray
+    heading: np.ndarray
+    speed: np.ndarray
+    observed: np.ndarray
+    kind: str
+    model: str
+    color: str
+    size: np.ndarray
+    notes: tuple[str, ...] = ()
+
+    @property
+    def name(self) -> str:
+        """Stable actor id: ``obstacle_<first perception track id>``."""
+        return f"obstacle_{self.track_ids[0]}"
+
+    def position_at(self, t: float, max_extrapolation_s: float = 1.0) -> np.ndarray | None:
+        """(2,) position at ``t`` [m]; extrapolated at the end speed up to the limit, else None."""
+        t0, t1 = float(self.times[0]), float(self.times[-1])
+        if t0 <= t <= t1:
+            return np.array([np.interp(t, self.times, self.xy[:, 0]),
+                             np.interp(t, self.times, self.xy[:, 1])])
+        if t0 - max_extrapolation_s <= t < t0:
+            i, dt = 0, t - t0
+        elif t1 < t <= t1 + max_extrapolation_s:
+            i, dt = -1, t - t1
+        else:
+            return None
+        d = np.array([np.cos(self.heading[i]), np.sin(self.heading[i])])
+        return self.xy[i] + d * self.speed[i] * dt
+
+    def heading_at(self, t: float) -> float:
+        i = int(np.clip(np.searchsorted(self.times, t), 0, len(self.times) - 1))
+        return float(self.heading[i])
+
+
+@dataclass(frozen=True, eq=False)
+class _Piece:
+    track_id: int
+    rows: np.ndarray  # indices into Detections, time ordered
+
+    def start(self, d: Detections) -> float:
+        return float(d.times[self.rows[0]])
+
+    def end(self, d: Detections) -> float:
+        return float(d.times[self.rows[-1]])
+
+
+def _coarse(d: Detections, rows: np.ndarray) -> str | None:
+    kinds = [_TYPE_KIND[t] for t in d.type[rows].tolist() if t in _TYPE_KIND]
+    return Counter(kinds).most_common(1)[0][0] if kinds else None
+
+
+def _stitch(d: Detections, pieces: list[_Piece], period: float) -> list[list[_Piece]]:
+    """Link pieces into chains (greedy on the extrapolation distance)."""
+    links = []
+    kinds = [_coarse(d, p.rows) for p in pieces]
+    for i, a in enumerate(pieces):
+        ra = a.rows[-1]
+        for j, b in enumerate(pieces):
+            if i == j:
+                continue
+            gap = b.start(d) - a.end(d)
+            if not 0.0 < gap <= MAX_GAP_S + 1e-9:
+                continue
+            if kinds[i] and kinds[j] and kinds[i] != kinds[j]:
+                continue
+            rb = b.rows[0]
+            if abs(d.size[ra, 0] - d.size[rb, 0]) > 3.0:
+                continue
+            pred = d.xy[ra] + d.velocity[ra] * gap
+            dist = float(np.hypot(*(d.xy[rb] - pred)))
+            if dist <= STITCH_GATE_M + STITCH_GATE_PER_S * gap:
+                links.append((dist + 0.1 * gap, i, j))
+    nxt: dict[int, int] = {}
+    prv: dict[int, int] = {}
+    for _, i, j in sorted(links):
+        if i in nxt or j in prv:
+            continue
+        # the chain must not overlap in time: j starts after i's chain end by construction
+        nxt[i], prv[j] = j, i
+    chains = []
+    for i in range(len(pieces)):
+        if i in prv:
+            continue
+        chain = [pieces[i]]
+        while i in nxt:
+            i = nxt[i]
+            chain.append(pieces[i])
+        chains.append(chain)
+    return chains
+
+
+def _hermite(p0: np.ndarray, v0: np.ndarray, p1: np.ndarray, v1: np.ndarray, h: float,
+             u: np.ndarray) -> np.ndarray:
+    """Cubic Hermite points (len(u), 2) between p0 and p1 over a gap of h seconds, u in [0, 1]."""
+    u = u[:, None]
+    h00 = 2 * u**3 - 3 * u**2 + 1
+    h10 = u**3 - 2 * u**2 + u
+    h01 = -2 * u**3 + 3 * u**2
+    h11 = u**3 - u**2
+    return h00 * p0 + h10 * h * v0 + h01 * p1 + h11 * h * v1
+
+
+def smooth(times: np.ndarray, values: np.ndarray, sigma_s: float = SMOOTH_SIGMA_S) -> np.ndarray:
+    """Local linear regression with a Gaussian kernel (zero phase, unbiased at the ends).
+
+    Args:
+        times: (n,) sample times [s].
+        values: (n, D) samples.
+        sigma_s: kernel standard deviation [s].
+
+    Returns:
+        (n, D) smoothed samples.
+    """
+    n = len(times)
+    if n < 3 or sigma_s <= 0:
+        return values.copy()
+    dt = times[None, :] - times[:, None]                      # (n, n): sample j relative to i
+    w = np.exp(-0.5 * (dt / sigma_s) ** 2) * (np.abs(dt) <= 3 * sigma_s)
+    s0 = w.sum(1)
+    s1 = (w * dt).sum(1)
+    s2 = (w * dt * dt).sum(1)
+    det = s0 * s2 - s1 * s1
+    # weights of the intercept of a weighted linear fit
+    lw = w * (s2[:, None] - s1[:, None] * dt) / np.where(np.abs(det) > 1e-12, det, np.inf)[:, None]
+    flat = np.abs(det) <= 1e-12
+    lw[flat] = w[flat] / s0[flat, None]
+    return lw @ values
+
+
+def _classify(d: Detections, rows: np.ndarray) -> tuple[str, str, str, np.ndarray, list[str]]:
+    notes = []
+    size = np.median(d.size[rows], axis=0)
+    subs = [s for s in d.sub_type[rows].tolist() if s in SUB_TYPES]
+    if subs:
+        kind, model = SUB_TYPES[Counter(subs).most_common(1)[0][0]]
+    else:
+        coarse = _coarse(d, rows)
+        length, width = float(size[0]), float(size[1])
+        if coarse in (None, "vehicle") and width >= 1.2:
+            kind = "vehicle"
+            model = ("bus" if length >= 10.3 else "truck" if length >= 6.7
+                     else "suv" if length >= 4.8 else "sedan")
+        elif coarse == "cyclist" or (coarse is None and length >= 1.2):
+            kind, model = "cyclist", "sedan"
+        else:
+            kind, model = "pedestrian", "sedan"
+        notes.append(f"class never recognised; {kind} ({model}) from the perceived size "
+                     f"{length:.1f} x {width:.1f} m")
+    colors = [c for c in (d.color[i] for i in rows.tolist()) if c in COLORS]
+    if colors:
+        color = Counter(colors).most_common(1)[0][0]
+    else:
+        color = DEFAULT_COLOR
+        notes.append(f"colour never recognised; assumed {DEFAULT_COLOR}")
+    return kind, model, color, size, notes
+
+
+def _resample(d: Detections, chain: list[_Piece], period: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Chain detections on a uniform grid: (times, xy, perceived heading, observed)."""
+    rows = np.concatenate([p.rows for p in chain])
+    t = d.times[rows]
+    t0, t1 = float(t[0]), float(t[-1])
+    n = int(round((t1 - t0) / period)) + 1
+    grid = t0 + period * np.arange(n)
+    slot = np.clip(np.round((t - t0) / period).astype(np.int64), 0, n - 1)
+    xy = np.full((n, 2), np.nan)
+    heading = np.full(n, np.nan)
+    vel = np.zeros((n, 2))
+    xy[slot] = d.xy[rows]
+    heading[slot] = d.heading[rows]
+    vel[slot] = d.velocity[rows]
+    observed = ~np.isnan(xy[:, 0])
+    obs = np.flatnonzero(observed)
+    for a, b in zip(obs[:-1], obs[1:], strict=True):
+        if b - a > 1:
+            u = (np.arange(a + 1, b) - a) / (b - a)
+            xy[a + 1:b] = _hermite(xy[a], vel[a], xy[b], vel[b], (b - a) * period, u)
+            heading[a + 1:b] = np.where(u < 0.5, heading[a], heading[b])
+    return grid, xy, heading, observed
+
+
+def build_tracks(d: Detections, period_s: float) -> list[Track]:
+    """Tracks of every movable obstacle (map entities are left to the world attachment).
+
+    Args:
+        d: the recording's detections (world frame).
+        period_s: perception period [s].
+
+    Returns:
+        Tracks ordered by their first perception track id.
+    """
+    movable = (d.type != TYPE_UNKNOWN_UNMOVABLE) & ~np.isin(d.sub_type, _STATIC_SUB_TYPES)
+    pieces = []
+    for tid in np.unique(d.track_id[movable]).tolist():
+        rows = np.flatnonzero(movable & (d.track_id == tid))
+        rows = rows[np.argsort(d.times[rows], kind="stable")]
+        pieces.append(_Piece(int(tid), rows))
+    tracks = []
+    for chain in _stitch(d, pieces, period_s):
+        rows = np.concatenate([p.rows for p in chain])
+        if len(rows) < MIN_DETECTIONS:
+            continue
+        grid, xy, perceived, observed = _resample(d, chain, period_s)
+        xy = smooth(grid, xy)
+        if len(grid) > 1:
+            vel = np.gradient(xy, grid, axis=0)
+        else:
+            vel = d.velocity[rows[:1]].copy()
+        speed = np.hypot(vel[:, 0], vel[:, 1])
+        heading = np.where(speed > MOVING_SPEED_MPS, np.arctan2(vel[:, 1], vel[:, 0]),
+                           perceived)
+        kind, model, color, size, notes = _classify(d, rows)
+        tracks.append(Track(
+            track_ids=tuple(p.track_id for p in chain), times=grid, xy=xy,
+            heading=wrap(heading), speed=speed, observed=observed, kind=kind, model=model,
+            color=color, size=size, notes=tuple(notes)))
+    return sorted(tracks, key=lambda tr: tr.track_ids[0])
+
+
+__all__ = ["SUB_TYPES", "Track", "build_tracks", "smooth"]
