@@ -1,0 +1,124 @@
+"""``rocas catalog list|record|generate``: the accident catalog (types A1-A12).
+
+- ``list [--json]``: id, title, responsible module, parameter(s), fix value, consequence.
+- ``record DIR [--only A9 ...]``: simulate every entry with the ADS defaults and write its
+  accident recording ``DIR/<key>.mcap`` (the files shipped in ``recordings/``).
+- ``generate --instances K [-o DIR] [--seed S]``: K seeded variants per type that still
+  crash; reports tried and crashing counts per type, writes the variants as scenario TOML.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from rocas.cli.console import Env
+from rocas.errors import UsageError
+
+HELP = "the accident catalog (A1-A12): list it, record its accidents, generate instances"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
+    ls = sub.add_parser("list", help="show the entries and their ground truth")
+    ls.add_argument("--json", action="store_true", help="print the ground truth as JSON")
+    rec = sub.add_parser("record", help="write the accident recording of every entry")
+    rec.add_argument("directory", metavar="DIR", help="output directory (e.g. recordings/)")
+    rec.add_argument("--only", action="append", default=[], metavar="ID",
+                     help="record only this entry (repeatable)")
+    gen = sub.add_parser("generate", help="seeded variants of every type that still crash")
+    gen.add_argument("--instances", type=int, required=True, metavar="K",
+                     help="variants per type")
+    gen.add_argument("-o", "--output", metavar="DIR", default=None,
+                     help="write the crashing variants as scenario TOML files here")
+    gen.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
+    gen.add_argument("--only", action="append", default=[], metavar="ID",
+                     help="only this type (repeatable)")
+    gen.add_argument("--json", action="store_true", help="print the counts as JSON")
+
+
+def _selected(only: list[str]):  # noqa: ANN202
+    from rocas.scenarios.catalog import entries, entry
+
+    return [entry(i) for i in only] if only else list(entries())
+
+
+def _truth_json(e) -> dict:  # noqa: ANN001
+    t = e.truth
+    return {"id": t.id, "key": e.key, "title": t.title, "paper": t.paper,
+            "consequence": t.consequence, "collision_with": t.collision_with,
+            "situation": t.situation, "module": t.module, "trigger_entity": t.trigger_entity,
+            "trigger_property": t.trigger_property, "reference": dict(t.reference),
+            "parameters": list(t.parameters), "fix": dict(t.fix), "fixable": t.fixable,
+            "no_fix_reason": t.no_fix_reason, "override": t.override,
+            "diff_module": t.diff_module, "diff_change_s": t.diff_change_s,
+            "duration_s": e.scenario.duration_s}
+
+
+def _list(args: argparse.Namespace, env: Env) -> int:
+    from rich.table import Table
+
+    items = _selected([])
+    if args.json:
+        print(json.dumps([_truth_json(e) for e in items], indent=2), file=env.stdout)
+        return 0
+    table = Table(title="rocas accident catalog")
+    for col in ("id", "title", "module", "parameter(s)", "fix", "consequence"):
+        table.add_column(col)
+    for e in items:
+        t = e.truth
+        fix = ", ".join(f"{v:g}" for v in t.fix.values()) if t.fixable else "none exists"
+        table.add_row(t.id, t.title, t.module, "\n".join(t.parameters), fix,
+                      t.consequence + (f" ({t.collision_with})" if t.collision_with else ""))
+    env.out().print(table)
+    return 0
+
+
+def _record(args: argparse.Namespace, env: Env) -> int:
+    from rocas.scenarios.catalog import accident_matches
+    from rocas.sim.engine import simulate
+
+    out_dir = Path(args.directory)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    failed = []
+    for e in _selected(args.only):
+        path = out_dir / f"{e.key}.mcap"
+        res = simulate(e.scenario, output=path)
+        ok = accident_matches(e.truth, res.outcome)
+        if not ok:
+            failed.append(e.id)
+        print(f"{e.id}: {res.outcome.summary()} -> {path} ({res.messages} messages)"
+              + ("" if ok else "  [NOT the documented accident]"), file=env.stdout)
+    if failed:
+        raise UsageError(f"entries not ending in their documented accident: {', '.join(failed)}")
+    return 0
+
+
+def _generate(args: argparse.Namespace, env: Env) -> int:
+    from rocas.scenarios.catalog import generate_instances, scenario_toml
+
+    if args.instances < 1:
+        raise UsageError("--instances must be >= 1")
+    out_dir = Path(args.output) if args.output else None
+    rows = []
+    for e in _selected(args.only):
+        rep = generate_instances(e, args.instances, seed=args.seed)
+        rows.append({"id": e.id, "key": e.key, "tried": rep.tried, "crashed": rep.crashed,
+                     "kept": len(rep.instances)})
+        if out_dir is not None:
+            from rocas._fs import atomic_path
+
+            for _, sc in rep.instances:
+                with atomic_path(out_dir / f"{sc.name}.toml") as tmp:
+                    tmp.write_text(scenario_toml(sc), encoding="utf-8")
+        if not args.json:
+            print(f"{e.id}: {rep.crashed}/{rep.tried} tried variants crash; kept "
+                  f"{len(rep.instances)}", file=env.stdout)
+    if args.json:
+        print(json.dumps(rows, indent=2), file=env.stdout)
+    return 0
+
+
+def run(args: argparse.Namespace, env: Env) -> int:
+    return {"list": _list, "record": _record, "generate": _generate}[args.action](args, env)

@@ -1,0 +1,376 @@
+"""The accident catalog: twelve scenarios modelled on the paper's accident types A1-A12.
+
+Each entry is a scenario TOML file in this package (``a01_*.toml`` ... ``a12_*.toml``) in the
+ordinary scenario format plus one extra table, ``[ground_truth]``, that states the known answer:
+the triggering entity and property (and a mutation of it that avoids the accident), the
+responsible module, the parameter(s) and values that avoid it (or that no configuration fix
+exists), and what ``rocas diff`` finds between the accident and the physically mutated run.
+
+```python
+from rocas.scenarios.catalog import entries, entry
+e = entry("A9")
+e.scenario            # the Scenario (defaults of the ADS: the accident)
+e.truth.fix           # {"perception.brake_threshold": 0.99}
+e.reference_scenario  # the triggering property mutated: no accident
+```
+
+Instances (:func:`generate_instances`) are seeded variants of an entry (positions, speeds,
+timing and weather jittered) that still crash.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import json
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from rocas.errors import ScenarioError, UsageError
+from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
+from rocas.scenarios.model import Scenario
+
+CONSEQUENCES = ("collision", "emergency")
+MODULES = ("perception", "prediction", "planning")
+_ENTITY_KEYS = {"actor": "actors", "object": "objects", "area": "areas",
+                "traffic_light": "traffic_lights"}
+_TRUTH_KEYS = {"id", "title", "paper", "consequence", "collision_with", "situation", "module",
+               "trigger_entity", "trigger_property", "reference", "parameters", "fix",
+               "fix_note", "fixable", "no_fix_reason", "override", "diff_module",
+               "diff_change_s", "diff_note", "jitter"}
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """The known answer of one catalog entry.
+
+    Attributes:
+        id: type id, "A1" ... "A12".
+        title: one line.
+        paper: the paper's description of the type (Table 4).
+        consequence: "collision" or "emergency" (emergency braking) with the defaults.
+        collision_with: the entity the ego hits (collisions only).
+        situation: driving situation (intersection, following, merging, turning).
+        module: the responsible module.
+        trigger_entity: id of the triggering entity; trigger_property: its property.
+        reference: the physical mutation that avoids the accident, ``{"actor": id, field: v}``
+            (or ``object``/``area``/``traffic_light``) in the scenario file's terms.
+        parameters: the responsible module's parameter(s) (``module.name``).
+        fix: parameter values that avoid the accident ({} when none exists).
+        fixable: whether a configuration fix exists.
+        no_fix_reason: why not (unfixable entries).
+        override: scenario-specific ADS overrides and why ("" when the defaults are used).
+        diff_module: the first deviating module ``rocas diff`` names between the accident
+            recording and the physically mutated reference; diff_change_s: its change time [s].
+        jitter: instance generation ranges (see :func:`generate_instances`).
+    """
+
+    id: str
+    title: str
+    paper: str
+    consequence: str
+    collision_with: str | None
+    situation: str
+    module: str
+    trigger_entity: str
+    trigger_property: str
+    reference: Mapping[str, Any]
+    parameters: tuple[str, ...]
+    fix: Mapping[str, float]
+    fix_note: str
+    fixable: bool
+    no_fix_reason: str
+    override: str
+    diff_module: str
+    diff_change_s: float | None
+    diff_note: str
+    jitter: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class CatalogEntry:
+    """One accident type: its scenario (the accident with the defaults) and ground truth."""
+
+    key: str
+    scenario: Scenario
+    truth: GroundTruth
+    document: Mapping[str, Any]
+
+    @property
+    def id(self) -> str:
+        return self.truth.id
+
+    @property
+    def reference_scenario(self) -> Scenario:
+        """The scenario with the triggering property mutated (the accident is avoided)."""
+        return mutate(self.document, self.truth.reference, f"catalog/{self.key}.toml",
+                      name_suffix="_reference")
+
+
+def _fail(source: str, key: str, reason: str) -> ScenarioError:
+    return ScenarioError(f"{source}: ground_truth.{key}: {reason}")
+
+
+def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
+    unknown = set(data) - _TRUTH_KEYS
+    if unknown:
+        raise _fail(source, sorted(unknown)[0], "unknown key")
+    for key in ("id", "title", "consequence", "module", "trigger_entity", "trigger_property",
+                "reference", "parameters", "diff_module"):
+        if key not in data:
+            raise _fail(source, key, "missing")
+    if data["consequence"] not in CONSEQUENCES:
+        raise _fail(source, "consequence", f"expected one of {CONSEQUENCES}")
+    if data["module"] not in MODULES:
+        raise _fail(source, "module", f"expected one of {MODULES}")
+    from rocas.ads.params import PARAMETERS
+
+    for name in list(data["parameters"]) + list(data.get("fix", {})):
+        if name not in PARAMETERS:
+            raise _fail(source, "parameters", f"unknown ADS parameter {name!r}")
+        if not name.startswith(data["module"] + "."):
+            raise _fail(source, "parameters", f"{name} is not a {data['module']} parameter")
+    fixable = bool(data.get("fixable", True))
+    if fixable != bool(data.get("fix")):
+        raise _fail(source, "fix", "a fixable entry needs fix values, an unfixable one none")
+    return GroundTruth(
+        id=data["id"], title=data["title"], paper=data.get("paper", ""),
+        consequence=data["consequence"], collision_with=data.get("collision_with"),
+        situation=data.get("situation", ""), module=data["module"],
+        trigger_entity=data["trigger_entity"], trigger_property=data["trigger_property"],
+        reference=dict(data["reference"]), parameters=tuple(data["parameters"]),
+        fix={k: float(v) for k, v in data.get("fix", {}).items()},
+        fix_note=data.get("fix_note", ""), fixable=fixable,
+        no_fix_reason=data.get("no_fix_reason", ""), override=data.get("override", ""),
+        diff_module=data["diff_module"], diff_change_s=data.get("diff_change_s"),
+        diff_note=data.get("diff_note", ""), jitter=dict(data.get("jitter", {})),
+    )
+
+
+def mutate(document: Mapping[str, Any], change: Mapping[str, Any], source: str,
+           name_suffix: str = "") -> Scenario:
+    """The scenario of ``document`` with one entity's fields replaced.
+
+    ``change`` names the entity by kind (``actor``, ``object``, ``area``, ``traffic_light``)
+    and gives the new field values in the file format, e.g. ``{"actor": "red_truck",
+    "color": "white"}``; the result is validated like any scenario file.
+    """
+    doc = copy.deepcopy(dict(document))
+    kinds = [k for k in _ENTITY_KEYS if k in change]
+    if len(kinds) != 1:
+        raise UsageError(f"{source}: a mutation names exactly one entity (got {kinds})")
+    kind = kinds[0]
+    ident = change[kind]
+    items = doc.get(_ENTITY_KEYS[kind], [])
+    for item in items:
+        if item.get("id") == ident:
+            for field, value in change.items():
+                if field == kind:
+                    continue
+                if field == "speed_mps":
+                    item.pop("speed_profile", None)
+                if field == "speed_profile":
+                    item.pop("speed_mps", None)
+                item[field] = value
+            break
+    else:
+        raise UsageError(f"{source}: no {kind} {ident!r} to mutate")
+    if name_suffix:
+        doc["scenario"] = {**doc["scenario"], "name": doc["scenario"]["name"] + name_suffix}
+    return scenario_from_dict(doc, source=source)
+
+
+def _root():  # noqa: ANN202
+    return resources.files("rocas.scenarios") / "catalog"
+
+
+@cache
+def _load_all() -> tuple[CatalogEntry, ...]:
+    out = []
+    for f in sorted(_root().iterdir(), key=lambda p: p.name):
+        if not (f.name.startswith("a") and f.name.endswith(".toml")):
+            continue
+        key = f.name[:-5]
+        source = f"catalog/{f.name}"
+        data = tomllib.loads(f.read_text(encoding="utf-8"))
+        truth_doc = data.pop("ground_truth", None)
+        if truth_doc is None:
+            raise ScenarioError(f"{source}: no [ground_truth] table")
+        scenario = scenario_from_dict(data, source=source)
+        out.append(CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source),
+                                document=data))
+    return tuple(out)
+
+
+def entries() -> tuple[CatalogEntry, ...]:
+    """All catalog entries, in type order (A1 first)."""
+    return tuple(sorted(_load_all(), key=lambda e: int(e.id[1:])))
+
+
+def entry(type_id: str) -> CatalogEntry:
+    """One entry by type id ("A9", "a9", "a09") or file stem."""
+    want = type_id.lower()
+    for e in entries():
+        if want in (e.id.lower(), e.key, e.key.split("_", 1)[0]) or (
+                want[:1] == "a" and want[1:].isdigit() and int(want[1:]) == int(e.id[1:])):
+            return e
+    raise UsageError(f"no catalog entry {type_id!r}",
+                     f"available: {', '.join(e.id for e in entries())}")
+
+
+def accident_matches(truth: GroundTruth, outcome: Any) -> bool:
+    """Whether a run's outcome is the entry's documented accident."""
+    if truth.consequence == "collision":
+        return bool(outcome.collided) and (truth.collision_with is None
+                                           or outcome.collision_with == truth.collision_with)
+    return bool(outcome.emergency) and not outcome.collided
+
+
+def accident_time(outcome: Any) -> float | None:
+    """Time of the accident [s]: the collision, else the first emergency sign."""
+    if outcome.collided:
+        return outcome.collision_time_s
+    times = [t for t in (outcome.hard_brake_time_s, outcome.estop_time_s) if t is not None]
+    return min(times) if times else None
+
+
+# --- instances ---------------------------------------------------------------------------------
+
+def _jittered(e: CatalogEntry, rng: np.random.Generator) -> Scenario:
+    """One random variant of the entry: the actors' start positions and speeds, the timing
+    (a common time shift of speed profiles) and the weather are jittered within the entry's
+    ``jitter`` ranges (defaults below)."""
+    j = {"position_m": 1.0, "speed_rel": 0.04, "time_s": 0.2, "weather": 5.0,
+         "actors": None, **e.truth.jitter}
+    doc = scenario_to_dict(e.scenario)
+    chosen = j["actors"]
+    for a in doc["actors"]:
+        if chosen is not None and a["id"] not in chosen:
+            continue
+        if a.get("route"):
+            a["start_s_m"] = max(0.0, a["start_s_m"] + rng.uniform(-1, 1) * j["position_m"])
+        else:
+            dx, dy = rng.uniform(-1, 1, 2) * j["position_m"] * 0.5
+            a["waypoints"] = [[p[0] + dx, p[1] + dy] for p in a["waypoints"]]
+        scale = 1.0 + rng.uniform(-1, 1) * j["speed_rel"]
+        shift = rng.uniform(-1, 1) * j["time_s"]
+        knots = a["speed_profile"]
+        a["speed_profile"] = [[k[0] if i == 0 else max(k[0] + shift, knots[i - 1][0] + 1e-3),
+                               k[1] * scale] for i, k in enumerate(knots)]
+    w = doc["weather"]
+    for name in ("cloudiness", "precipitation", "fog_density"):
+        if w[name] > 0 or name == "cloudiness":
+            w[name] = float(np.clip(w[name] + rng.uniform(-1, 1) * j["weather"], 0.0, 100.0))
+    return scenario_from_dict(doc, source=f"catalog/{e.key}.toml (instance)")
+
+
+@dataclass(frozen=True)
+class InstanceReport:
+    """Instance generation of one type: how many variants were tried and how many crash."""
+
+    entry: CatalogEntry
+    tried: int
+    crashed: int
+    instances: tuple[tuple[int, Scenario], ...]   # (seed, scenario) of the crashing variants
+
+
+def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
+                       max_tries: int | None = None, batch: int = 16) -> InstanceReport:
+    """Up to ``count`` seeded variants of an entry that still crash (as documented).
+
+    Variants are drawn in batches from ``numpy.random.default_rng([seed, k])`` for
+    k = 0, 1, ...; each is simulated and kept when it ends in the entry's accident. Stops at
+    ``count`` kept or ``max_tries`` (default ``4 * count``) tried.
+    """
+    from rocas.sim.engine import simulate_batch
+
+    if count < 1:
+        raise UsageError("the number of instances must be >= 1")
+    max_tries = max_tries or 4 * count
+    kept: list[tuple[int, Scenario]] = []
+    tried = 0
+    crashed = 0
+    k = 0
+    while len(kept) < count and tried < max_tries:
+        n = min(batch, max_tries - tried)
+        variants = [(k + i, _jittered(e, np.random.default_rng([seed, k + i]))) for i in range(n)]
+        k += n
+        res = simulate_batch([v for _, v in variants])
+        tried += n
+        for (vseed, sc), out in zip(variants, res.outcomes, strict=True):
+            if accident_matches(e.truth, out):
+                crashed += 1
+                if len(kept) < count:
+                    kept.append((vseed, dataclasses.replace(
+                        sc, name=f"{e.key}_i{vseed:03d}",
+                        description=f"{sc.description} (instance {vseed})")))
+    return InstanceReport(entry=e, tried=tried, crashed=crashed, instances=tuple(kept))
+
+
+def trajectory_rmse(a: np.ndarray, b: np.ndarray, times: np.ndarray, until_s: float) -> float:
+    """RMSE [m] between two ego position traces (T+1, >=2) over [0, until_s]."""
+    sel = times <= until_s + 1e-9
+    if not sel.any():
+        return 0.0
+    d = a[sel, :2] - b[sel, :2]
+    return math.sqrt(float(np.mean(np.sum(d * d, axis=1))))
+
+
+def outcome_record(outcome: Any) -> dict[str, Any]:
+    """The fields of an outcome that the catalog compares."""
+    return {"collided": outcome.collided, "collision_with": outcome.collision_with,
+            "emergency": outcome.emergency}
+
+
+__all__ = ["CatalogEntry", "GroundTruth", "InstanceReport", "accident_matches", "accident_time",
+           "entries", "entry", "generate_instances", "mutate", "outcome_record",
+           "scenario_toml", "trajectory_rmse"]
+
+
+
+# --- writing variants back as scenario files ---------------------------------------------------
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(float(v)) if isinstance(v, float) else str(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, Mapping):
+        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()
+                                if x is not None) + " }"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def scenario_toml(scenario: Scenario) -> str:
+    """The scenario as a TOML document in the scenario file format."""
+    doc = scenario_to_dict(scenario)
+    lines = [f"format = {doc['format']}", ""]
+
+    def table(header: str, d: Mapping[str, Any]) -> None:
+        lines.append(header)
+        for k, v in d.items():
+            if v is None or isinstance(v, Mapping) and header == "[ego]":
+                continue
+            lines.append(f"{k} = {_toml_value(v)}")
+        lines.append("")
+
+    table("[scenario]", doc["scenario"])
+    table("[weather]", doc["weather"])
+    for key in ("lanes", "traffic_lights", "objects", "areas", "actors"):
+        for item in doc[key]:
+            table(f"[[{key}]]", item)
+    table("[ego]", doc["ego"])
+    for module, values in doc["ego"].get("params", {}).items():
+        table(f"[ego.params.{module}]", values)
+    return "\n".join(lines)

@@ -1,0 +1,46 @@
+import json
+
+from rocas.scenarios import load_scenario as load_scenario_text
+from rocas.scenarios.catalog import entries
+
+
+def test_list_shows_every_entry(rocas):
+    r = rocas("catalog", "list")
+    assert r.code == 0, r.stderr
+    for e in entries():
+        assert e.id in r.stdout and e.truth.module in r.stdout
+
+
+def test_list_json_gives_the_ground_truth(rocas):
+    r = rocas("catalog", "list", "--json")
+    assert r.code == 0
+    data = json.loads(r.stdout)
+    assert [d["id"] for d in data] == [e.id for e in entries()]
+    a9 = next(d for d in data if d["id"] == "A9")
+    assert a9["module"] == "perception" and a9["fix"] == {"perception.brake_threshold": 0.99}
+    assert a9["consequence"] == "emergency" and a9["diff_module"] == "perception"
+
+
+def test_generate_reports_counts_and_writes_loadable_scenarios(rocas, tmp_path):
+    r = rocas("catalog", "generate", "--instances", "2", "--only", "A9", "-o", tmp_path,
+              "--json")
+    assert r.code == 0, r.stderr
+    row = json.loads(r.stdout)[0]
+    assert row["id"] == "A9" and row["tried"] >= row["kept"] == 2 and row["crashed"] >= 2
+    files = sorted(tmp_path.glob("a09_*.toml"))
+    assert len(files) == 2
+    assert load_scenario_text(files[0]).name == files[0].stem
+
+
+def test_record_writes_the_accident(rocas, tmp_path):
+    r = rocas("catalog", "record", tmp_path, "--only", "A9")
+    assert r.code == 0, r.stderr
+    assert "A9: emergency" in r.stdout
+    assert (tmp_path / f"{entries()[0].key}.mcap").exists() or list(tmp_path.glob("a09_*.mcap"))
+
+
+def test_unknown_entry_and_bad_count_are_usage_errors(rocas, tmp_path):
+    r = rocas("catalog", "record", tmp_path, "--only", "A99")
+    assert r.code != 0 and "no catalog entry" in r.stderr
+    r = rocas("catalog", "generate", "--instances", "0")
+    assert r.code != 0 and "--instances" in r.stderr

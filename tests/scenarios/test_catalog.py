@@ -1,0 +1,137 @@
+"""The accident catalog: every entry crashes with the ADS defaults as documented, its fix (or
+the physical mutation of its trigger) avoids the accident, the unfixable ones resist every
+single-parameter change of their module, and the shipped recordings match the catalog."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rocas.ads.params import PARAMETERS
+from rocas.recording.reader import open_recording
+from rocas.scenarios.catalog import (
+    accident_matches,
+    accident_time,
+    entries,
+    entry,
+    generate_instances,
+    mutate,
+    scenario_toml,
+    trajectory_rmse,
+)
+from rocas.scenarios.loader import scenario_from_dict
+from rocas.sim.engine import simulate_batch
+
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
+#: Bound on the ego's deviation before the accident when the fix is applied [m].
+PRE_ACCIDENT_RMSE_M = 0.5
+#: The comparison window ends this long before the accident [s].
+PRE_ACCIDENT_MARGIN_S = 3.0
+ENTRIES = entries()
+IDS = [e.id for e in ENTRIES]
+
+
+def _clean(o) -> bool:  # noqa: ANN001
+    return not o.collided and not o.emergency
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Per entry, one batch: defaults, the documented fix (fixable entries), the reference."""
+    out = {}
+    for e in ENTRIES:
+        scs = [e.scenario, e.reference_scenario]
+        params = [None, None]
+        if e.truth.fixable:
+            scs.append(e.scenario)
+            params.append(dict(e.truth.fix))
+        out[e.id] = simulate_batch(scs, params=params)
+    return out
+
+
+def test_the_catalog_has_unique_ordered_ids():
+    assert IDS == sorted(IDS, key=lambda i: int(i[1:]))
+    assert len(set(IDS)) == len(IDS)
+    assert all(e.key.startswith(f"a{int(e.id[1:]):02d}_") for e in ENTRIES)
+    assert entry("a9").id == entry("A09").id == "A9"
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_crashes_with_the_default_configuration(runs, type_id):
+    e = entry(type_id)
+    o = runs[type_id].outcomes[0]
+    assert accident_matches(e.truth, o), o.summary()
+    assert accident_time(o) is not None and accident_time(o) <= e.scenario.duration_s
+    if e.truth.consequence == "collision":
+        assert o.collision_with == e.truth.collision_with
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_mutating_the_trigger_avoids_the_accident(runs, type_id):
+    o = runs[type_id].outcomes[1]
+    assert _clean(o), o.summary()
+
+
+@pytest.mark.parametrize("type_id", [e.id for e in ENTRIES if e.truth.fixable])
+def test_the_documented_fix_avoids_the_accident_and_keeps_the_trajectory(runs, type_id):
+    res = runs[type_id]
+    o = res.outcomes[2]
+    assert _clean(o), o.summary()
+    t_acc = accident_time(res.outcomes[0])
+    rmse = trajectory_rmse(res.ego[0], res.ego[2], res.times, t_acc - PRE_ACCIDENT_MARGIN_S)
+    assert rmse < PRE_ACCIDENT_RMSE_M
+
+
+def _grid(name: str, points: int) -> list[float]:
+    p = PARAMETERS[name]
+    return [float(v) for v in np.linspace(p.low, p.high, points)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("type_id", [e.id for e in ENTRIES if not e.truth.fixable])
+def test_no_single_parameter_of_the_module_avoids_an_unfixable_accident(type_id):
+    e = entry(type_id)
+    names = [n for n in PARAMETERS if n.startswith(e.truth.module + ".")]
+    params = [{n: v} for n in names for v in _grid(n, 3)]
+    res = simulate_batch([e.scenario] * len(params), params=params)
+    avoided = [p for p, o in zip(params, res.outcomes, strict=True) if _clean(o)]
+    assert not avoided, f"{type_id} is avoided by {avoided}"
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_the_shipped_recording_is_in_sync(type_id):
+    e = entry(type_id)
+    path = RECORDINGS / f"{e.key}.mcap"
+    assert path.is_file(), f"missing {path}; run: rocas catalog record recordings/"
+    assert path.stat().st_size < 5_000_000
+    rec = open_recording(path).scan()
+    meta = dict(rec.metadata)
+    run, ego = meta["rocas.run"], meta["rocas.ego"]
+    assert ego["scenario"] == e.scenario.name
+    assert float(ego["duration_s"]) == e.scenario.duration_s <= 30.0
+    assert run["collided"] == ("true" if e.truth.consequence == "collision" else "false")
+    assert run["emergency"] == "true" or e.truth.consequence == "collision"
+    assert run["collision_with"] == (e.truth.collision_with or "")
+
+
+def test_mutate_validates_and_names_the_entity():
+    e = entry("A9")
+    s = mutate(e.document, {"actor": e.truth.trigger_entity, "color": "white"}, "x")
+    assert next(a for a in s.actors if a.id == e.truth.trigger_entity).color == "white"
+    with pytest.raises(Exception, match="no actor"):
+        mutate(e.document, {"actor": "nobody", "color": "white"}, "x")
+
+
+def test_instances_are_seeded_crashing_variants_that_round_trip_as_toml():
+    import tomllib
+
+    e = entry("A9")
+    a = generate_instances(e, 2, seed=3, max_tries=4)
+    b = generate_instances(e, 2, seed=3, max_tries=4)
+    assert a.tried == 4 and 0 < a.crashed <= 4 and len(a.instances) == 2
+    assert [s for _, s in a.instances] == [s for _, s in b.instances]
+    assert a.instances[0][1] != e.scenario
+    back = scenario_from_dict(tomllib.loads(scenario_toml(a.instances[0][1])))
+    assert back == a.instances[0][1]
