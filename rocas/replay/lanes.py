@@ -29,7 +29,8 @@ def project(points: np.ndarray, p: np.ndarray) -> tuple[float, float, float]:
     dist = np.hypot(*(p - q).T)
     i = int(np.argmin(dist))
     h = float(np.arctan2(d[i, 1], d[i, 0]))
-    lat = float(-np.sin(h) * (p[0] - q[i, 0]) + np.cos(h) * (p[1] - q[i, 1]))
+    side = -np.sin(h) * (p[0] - q[i, 0]) + np.cos(h) * (p[1] - q[i, 1])
+    lat = float(np.copysign(dist[i], side))  # true distance (a clamped end is not "beside")
     return float(arc_length(points)[i] + u[i] * np.sqrt(ll[i])), lat, h
 
 
@@ -56,30 +57,52 @@ def _offset(points: np.ndarray, lateral_m: float) -> np.ndarray:
     return points + lateral_m * np.stack([-np.sin(h), np.cos(h)], -1)
 
 
-def walk_lanes(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m: float,
-               forward: bool) -> np.ndarray:
-    """Points along the map from pose ``p`` for ``length_m`` metres, forward (following first
-    successors) or backward (through predecessors); a straight line where the map ends or the
-    pose matches no lane. Forward: ordered away from p; backward: ordered towards p. p itself
-    is excluded."""
-    if length_m <= 0.0:
-        return np.zeros((0, 2))
+def _graph(lanes: tuple[Lane, ...]) -> tuple[dict[str, Lane], dict[str, list[str]]]:
     by_id = {ln.id: ln for ln in lanes}
     preds: dict[str, list[str]] = {}
     for ln in lanes:
         for succ in ln.successors:
             preds.setdefault(succ, []).append(ln.id)
-    m = match_lane(lanes, p, heading)
+    return by_id, preds
+
+
+def _sequences(lanes: tuple[Lane, ...], first: Lane, s: float, length_m: float, forward: bool,
+               limit: int) -> list[list[str]]:
+    """Lane sequences from ``first`` (at arc length s) long enough to cover ``length_m``,
+    every branch (successors forward, predecessors backward), at most ``limit``."""
+    by_id, preds = _graph(lanes)
+    out: list[list[str]] = []
+
+    def visit(seq: list[str], remaining: float) -> None:
+        if len(out) >= limit:
+            return
+        lane = by_id[seq[-1]]
+        nxt = lane.successors if forward else tuple(preds.get(lane.id, ()))
+        if remaining <= 0.0 or not nxt or len(seq) > 30:
+            out.append(seq)
+            return
+        for n in nxt:
+            visit([*seq, n], remaining - float(arc_length(_polyline(by_id[n]))[-1]))
+
+    own = float(arc_length(_polyline(first))[-1])
+    visit([first.id], length_m - ((own - s) if forward else s))
+    return out
+
+
+def _build(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m: float,
+           forward: bool, match: tuple[Lane, float, float] | None, seq: list[str]) -> np.ndarray:
+    by_id = {ln.id: ln for ln in lanes}
     parts: list[np.ndarray] = []
     total = 0.0
     direction = np.array([np.cos(heading), np.sin(heading)]) * (1.0 if forward else -1.0)
     end = p
-    if m is not None:
-        lane, s, lat = m
-        pts = _polyline(lane)
-        arc = arc_length(pts)
-        visited = 0
-        while total < length_m and visited < 30:
+    if match is not None:
+        _, s, lat = match
+        for k, lane_id in enumerate(seq):
+            pts = _polyline(by_id[lane_id])
+            arc = arc_length(pts)
+            if k > 0:
+                s = -1.0 if forward else float(arc[-1]) + 1.0
             shifted = _offset(pts, lat)
             keep = shifted[arc > s + 1e-6] if forward else shifted[arc < s - 1e-6][::-1]
             if len(keep):
@@ -87,14 +110,8 @@ def walk_lanes(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m:
                 parts.append(seg[1:])
                 total += float(arc_length(seg)[-1])
                 end = seg[-1]
-            nxt = lane.successors[:1] if forward else preds.get(lane.id, [])[:1]
-            if not nxt:
+            if total >= length_m:
                 break
-            lane = by_id[nxt[0]]
-            pts = _polyline(lane)
-            arc = arc_length(pts)
-            s = -1.0 if forward else float(arc[-1]) + 1.0
-            visited += 1
         if parts:
             allp = np.vstack(parts)
             tail = allp[-2:] if len(allp) >= 2 else np.vstack([p, allp])
@@ -103,9 +120,30 @@ def walk_lanes(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m:
     if total < length_m:
         extra = length_m - total + 1.0
         parts.append(end + direction * np.linspace(1.0, extra, max(2, int(extra // 5) + 2))[:, None])
-    out = np.vstack(parts)
-    out = _trim(np.vstack([p, out]), length_m)[1:]
+    out = _trim(np.vstack([p, *parts]), length_m)[1:]
     return out if forward else out[::-1]
+
+
+def walk_lanes(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m: float,
+               forward: bool) -> np.ndarray:
+    """Points along the map from pose ``p`` for ``length_m`` metres, forward (following first
+    successors) or backward (through first predecessors), keeping the pose's offset from the
+    lane centre; a straight line where the map ends or the pose matches no lane. Forward:
+    ordered away from p; backward: ordered towards p. p itself is excluded."""
+    if length_m <= 0.0:
+        return np.zeros((0, 2))
+    m = match_lane(lanes, p, heading)
+    seq = _sequences(lanes, m[0], m[1], length_m, forward, 1)[0] if m is not None else []
+    return _build(lanes, p, heading, length_m, forward, m, seq)
+
+
+def forward_branches(lanes: tuple[Lane, ...], p: np.ndarray, heading: float, length_m: float,
+                     limit: int = 16) -> list[np.ndarray]:
+    """Every way forward from pose ``p`` over ``length_m`` metres (one polyline per branch,
+    starting with p); a single straight line when the pose matches no lane."""
+    m = match_lane(lanes, p, heading)
+    seqs = _sequences(lanes, m[0], m[1], length_m, True, limit) if m is not None else [[]]
+    return [np.vstack([p, _build(lanes, p, heading, length_m, True, m, q)]) for q in seqs]
 
 
 def _trim(points: np.ndarray, length_m: float) -> np.ndarray:
@@ -118,4 +156,4 @@ def _trim(points: np.ndarray, length_m: float) -> np.ndarray:
     return np.vstack([points[:k], points[k - 1] + u * (points[k] - points[k - 1])])
 
 
-__all__ = ["arc_length", "match_lane", "project", "walk_lanes"]
+__all__ = ["arc_length", "forward_branches", "match_lane", "project", "walk_lanes"]

@@ -202,7 +202,7 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     last = float(rec.ego_times[-1]) + base.dt_s
     if meta is None or not meta.get("duration_s"):
         base = dataclasses.replace(base, duration_s=round(last, 6))
-    tracks = tuple(build_tracks(rec.detections, rec.perception_period_s))
+    tracks = tuple(build_tracks(rec.detections, rec.perception_period_s, base.lanes))
     actors = tuple(actor_from_track(tr, base.lanes, base.dt_s, base.duration_s) for tr in tracks)
     for tr in tracks:
         notes.extend(f"{tr.name}: {n}" for n in tr.notes)

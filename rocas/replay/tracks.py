@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas.replay.frames import wrap
+from rocas.replay.lanes import arc_length, forward_branches, project
 from rocas.replay.source import (
     TYPE_BICYCLE,
     TYPE_PEDESTRIAN,
@@ -23,11 +24,14 @@ from rocas.replay.source import (
     TYPE_VEHICLE,
     Detections,
 )
-from rocas.scenarios.model import COLORS
+from rocas.scenarios.model import COLORS, Lane
 
 MAX_GAP_S = 2.5             # [s] longest gap between two pieces of one actor that is bridged
 STITCH_GATE_M = 2.0         # [m] distance gate at zero gap ...
 STITCH_GATE_PER_S = 1.5     # [m/s] ... growing with the gap
+MAX_REIDENTIFY_S = 30.0     # [s] longest gap across which a piece is re-identified on the map
+REIDENTIFY_GATE_M = 3.0     # [m] largest distance of the later piece from the way forward
+LONG_GAP_PENALTY = 100.0    # long-gap links rank after every short-gap link
 SMOOTH_SIGMA_S = 0.25       # [s] Gaussian kernel of the smoother
 MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurious
 MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
@@ -112,33 +116,78 @@ def _coarse(d: Detections, rows: np.ndarray) -> str | None:
     return Counter(kinds).most_common(1)[0][0] if kinds else None
 
 
-def _stitch(d: Detections, pieces: list[_Piece], period: float) -> list[list[_Piece]]:
-    """Link pieces into chains (greedy on the extrapolation distance)."""
+def _identity(d: Detections, rows: np.ndarray) -> tuple[int | None, str | None]:
+    """(most frequent known sub-type, most frequent known colour) of a piece."""
+    subs = [x for x in d.sub_type[rows].tolist() if x in SUB_TYPES]
+    colors = [c for c in (d.color[i] for i in rows.tolist()) if c in COLORS]
+    return (Counter(subs).most_common(1)[0][0] if subs else None,
+            Counter(colors).most_common(1)[0][0] if colors else None)
+
+
+def _reidentify(d: Detections, a: _Piece, b: _Piece, gap: float,
+                branches: list[np.ndarray]) -> float | None:
+    """Cost of linking ``b`` to ``a`` across a long gap (occlusion, out of range): ``b`` must
+    start on a way forward from ``a``'s end at a speed ``a`` could have kept."""
+    ra, rb = a.rows[-1], b.rows[0]
+    va = float(np.hypot(*d.velocity[ra]))
+    best = None
+    for poly in branches:
+        arc = arc_length(poly)
+        s, lat, _ = project(poly, d.xy[rb])
+        if abs(lat) > REIDENTIFY_GATE_M or s <= 0.0 or s >= arc[-1] - 1e-6:
+            continue
+        v = s / gap
+        if not 0.4 * va - 1.0 <= v <= 1.6 * va + 3.0:
+            continue
+        cost = abs(lat) + abs(v - va)
+        best = cost if best is None else min(best, cost)
+    return best
+
+
+def _stitch(d: Detections, pieces: list[_Piece], period: float,
+            lanes: tuple[Lane, ...] = ()) -> list[list[_Piece]]:
+    """Link pieces into chains (greedy on the extrapolation distance; id switches and short
+    gaps first, then re-identification across long gaps along the map)."""
     links = []
     kinds = [_coarse(d, p.rows) for p in pieces]
+    ids = [_identity(d, p.rows) for p in pieces]
     for i, a in enumerate(pieces):
         ra = a.rows[-1]
+        branches: list[np.ndarray] | None = None
         for j, b in enumerate(pieces):
             if i == j:
                 continue
             gap = b.start(d) - a.end(d)
-            if not 0.0 < gap <= MAX_GAP_S + 1e-9:
+            if not 0.0 < gap <= MAX_REIDENTIFY_S:
                 continue
             if kinds[i] and kinds[j] and kinds[i] != kinds[j]:
                 continue
             rb = b.rows[0]
             if abs(d.size[ra, 0] - d.size[rb, 0]) > 3.0:
                 continue
-            pred = d.xy[ra] + d.velocity[ra] * gap
-            dist = float(np.hypot(*(d.xy[rb] - pred)))
-            if dist <= STITCH_GATE_M + STITCH_GATE_PER_S * gap:
-                links.append((dist + 0.1 * gap, i, j))
+            if gap <= MAX_GAP_S + 1e-9:
+                pred = d.xy[ra] + d.velocity[ra] * gap
+                dist = float(np.hypot(*(d.xy[rb] - pred)))
+                if dist <= STITCH_GATE_M + STITCH_GATE_PER_S * gap:
+                    links.append((dist + 0.1 * gap, i, j))
+                continue
+            (sa, ca), (sb, cb) = ids[i], ids[j]
+            if sa is None or sa != sb or (ca and cb and ca != cb):
+                continue
+            if branches is None:
+                va = float(np.hypot(*d.velocity[ra]))
+                h = float(np.arctan2(d.velocity[ra, 1], d.velocity[ra, 0])) \
+                    if va > MOVING_SPEED_MPS else float(d.heading[ra])
+                branches = forward_branches(lanes, d.xy[ra], h,
+                                            (1.6 * va + 3.0) * MAX_REIDENTIFY_S)
+            cost = _reidentify(d, a, b, gap, branches)
+            if cost is not None:
+                links.append((LONG_GAP_PENALTY + cost, i, j))
     nxt: dict[int, int] = {}
     prv: dict[int, int] = {}
     for _, i, j in sorted(links):
         if i in nxt or j in prv:
             continue
-        # the chain must not overlap in time: j starts after i's chain end by construction
         nxt[i], prv[j] = j, i
     chains = []
     for i in range(len(pieces)):
@@ -243,12 +292,13 @@ def _resample(d: Detections, chain: list[_Piece], period: float
     return grid, xy, heading, observed
 
 
-def build_tracks(d: Detections, period_s: float) -> list[Track]:
+def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = ()) -> list[Track]:
     """Tracks of every movable obstacle (map entities are left to the world attachment).
 
     Args:
         d: the recording's detections (world frame).
         period_s: perception period [s].
+        lanes: the map, to re-identify an obstacle after a long gap along its ways forward.
 
     Returns:
         Tracks ordered by their first perception track id.
@@ -260,7 +310,7 @@ def build_tracks(d: Detections, period_s: float) -> list[Track]:
         rows = rows[np.argsort(d.times[rows], kind="stable")]
         pieces.append(_Piece(int(tid), rows))
     tracks = []
-    for chain in _stitch(d, pieces, period_s):
+    for chain in _stitch(d, pieces, period_s, lanes):
         rows = np.concatenate([p.rows for p in chain])
         if len(rows) < MIN_DETECTIONS:
             continue
