@@ -81,8 +81,9 @@ class Variable:
         return (self.choices.index(value) + 0.5) / len(self.choices)
 
     def change(self, value: Value) -> float:
-        """Size of a change from the original: L1 on enum/bool/int indices, normalised
-        distance on reals (|v - v0| / range)."""
+        """Size of a change from the original: 1 for a different enum choice or bool (enums
+        are nominal: a red truck is not "closer" to orange than to blue), |v - v0| for ints,
+        |v - v0| / range for reals."""
         if self.kind == "real":
             span = (self.high - self.low) or 1.0  # type: ignore[operator]
             return abs(float(value) - float(self.original)) / span  # type: ignore[arg-type]
@@ -90,7 +91,7 @@ class Variable:
             return float(abs(int(value) - int(self.original)))  # type: ignore[arg-type]
         if self.kind == "bool":
             return 0.0 if bool(value) == bool(self.original) else 1.0
-        return float(abs(self.choices.index(value) - self.choices.index(self.original)))
+        return 0.0 if value == self.original else 1.0
 
     @property
     def is_enum_like(self) -> bool:

@@ -20,8 +20,10 @@ def test_mask_genes_keep_originals():
 
 def test_distance_counts_properties_plus_l1_and_l2():
     assert SPACE.distance(Mutation()) == 0
-    # one enum step (truck -> bus) + one bool flip: 2 properties + L1 of 1 + 1
+    # an enum change (truck -> bus) + a bool flip: 2 properties + L1 of 1 + 1
     assert SPACE.distance(Mutation({"truck.model": "bus", "cone.enabled": False})) == 4
+    # enums are nominal: any other choice is one step
+    assert SPACE.distance(Mutation({"truck.model": "sedan"})) == 2
     # a real change of 10 % of its range: 1 + 0.1
     assert SPACE.distance(Mutation({"truck.speed": 14.0})) == pytest.approx(1.1)
 

@@ -1,0 +1,161 @@
+"""``rocas analyze ACCIDENT.mcap``: from an accident recording to its misconfiguration."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from rocas.cli.console import Env
+from rocas.cli.exit_codes import ExitStatus
+
+HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", metavar="ACCIDENT.mcap",
+                   help="accident recording (or a scenario file / example name with --scenario)")
+    p.add_argument("--scenario", action="store_true",
+                   help="SOURCE is a scenario (file or example name) to simulate as the accident")
+    p.add_argument("--out", metavar="RUN_DIR", help="run directory (default: runs/<name>)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--budget", type=int, default=240, help="simulations per search phase (default 240)")
+    p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
+    p.add_argument("--scope", choices=("module", "all"), default="module",
+                   help="cyber search over the deviating module (default) or every parameter")
+    p.add_argument("--executor", default="local", help="where simulations run (default local)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--validation", type=int, default=200, metavar="K",
+                   help="perturbed variants in the regression test (default 200)")
+    p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
+    p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of every phase")
+
+
+def run(args: argparse.Namespace, env: Env) -> int:
+    from rocas.pipeline.analyze import AnalyzeConfig, analyze
+
+    cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, population=args.population, scope=args.scope,
+                        executor=args.executor, workers=args.workers, delta_s=args.delta,
+                        validation_variants=args.validation)
+    if args.scenario:
+        from rocas.scenarios import resolve_scenario
+
+        source: Any = resolve_scenario(args.source)
+        name = source.name
+    else:
+        source = Path(args.source)
+        if not source.exists():
+            from rocas.errors import InputError
+
+            raise InputError(f"no such file: {source}", "check the path")
+        name = source.stem
+    out = Path(args.out) if args.out else Path("runs") / name
+    progress = _Progress(env, {"physical": cfg.budget, "cyber": cfg.budget,
+                               "validation": 2 * cfg.validation_variants})
+    try:
+        with progress:
+            report = analyze(source, out, cfg, resume=args.resume, progress=progress)
+    except KeyboardInterrupt as exc:
+        exc.kept = (f"finished phases and search checkpoints are kept in {out}; "  # type: ignore[attr-defined]
+                    "continue with --resume")
+        raise
+    if args.rrd:
+        _write_rrd(args.rrd, out, report)
+    if args.json:
+        env.stdout.write(json.dumps(report, indent=2) + "\n")
+    else:
+        render(report, out, env)
+        if args.rrd:
+            env.out().print(f"Rerun recording: {args.rrd}")
+    return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+
+
+def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
+    try:
+        from rocas.viz.analysis import write_run_dir_rrd  # the full debugger layout
+    except ImportError:
+        write_run_dir_rrd = None
+    if write_run_dir_rrd is not None:
+        write_run_dir_rrd(path, out)
+        return
+    from rocas.analysis.diff import diff
+    from rocas.viz.diff import write_diff_rrd
+
+    if (out / "reference.mcap").exists():
+        write_diff_rrd(diff(out / "accident.mcap", out / "reference.mcap",
+                            delta_s=report.get("delta_s", 3.0)), path)
+
+
+class _Progress:
+    """A rich progress bar per phase on stderr."""
+
+    def __init__(self, env: Env, totals: dict[str, int]) -> None:
+        self._totals = totals
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        self._p = Progress(TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(),
+                           TextColumn("{task.fields[info]}"), TimeElapsedColumn(), console=env.err(),
+                           transient=False)
+        self._tasks: dict[str, Any] = {}
+
+    def __enter__(self) -> _Progress:
+        self._p.__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._p.__exit__(*exc)
+
+    def __call__(self, phase: str, info: dict[str, Any]) -> None:
+        if phase not in self._tasks:
+            self._tasks[phase] = self._p.add_task(phase, total=self._totals.get(phase), info="")
+        task = self._tasks[phase]
+        if "generation" in info:
+            self._p.update(task, completed=info["evaluations"],
+                           info=f"gen {info['generation']}, feasible {info['feasible']}")
+        else:
+            self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
+
+
+def render(report: dict[str, Any], out: Path, env: Env) -> None:
+    """A report in the shape of one row of the paper's Table 4."""
+    from rich.panel import Panel
+    from rich.table import Table
+
+    from rocas.pipeline.report import _fmt
+
+    con = env.out()
+    t = Table(show_header=False, box=None, padding=(0, 1))
+    t.add_column(style="bold")
+    t.add_column()
+    acc = report["accident"]
+    t.add_row("verdict", report["verdict"].replace("_", " "))
+    if acc:
+        t.add_row("accident", f"{acc['kind']}" + (f" with {acc['other']}" if acc["other"] else "")
+                  + f" at {acc['time_s']:.2f} s")
+    trig = report["triggering_entity"]
+    if trig:
+        for p in trig["properties"]:
+            t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {p['name']} "
+                      f"{_fmt(p['original'])} -> {_fmt(p['mutated'])}")
+    if report["deviating_module"]:
+        t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
+    for m in report["misconfiguration"]:
+        t.add_row("misconfiguration", f"{m['parameter']} {_fmt(m['original'])} -> {_fmt(m['mutated'])}")
+    v = report["validation"]
+    if v and v["variants"]:
+        orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]
+        t.add_row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
+                  f"(original) vs {fixed:.0f} % (fixed)"
+                  + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else ""))
+    ss = report["search_space"]
+    if ss["parameters_searched"]:
+        t.add_row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "
+                  f"({100 * (ss['reduction'] or 0):.1f} % reduction)")
+    t.add_row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report["timings_s"].items()))
+    t.add_row("simulations", ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
+    t.add_row("run directory", str(out))
+    con.print(t)
+    con.print(Panel(report["explanation"], title="why", expand=False))

@@ -1,0 +1,502 @@
+"""``rocas analyze``: the paper's whole pipeline (sections 4-5) with a resumable run directory.
+
+Phases: replay -> physical mutation -> differential analysis -> cyber mutation (then
+minimisation) -> validation. Every phase writes its result into the run directory; searches
+checkpoint every generation, so ``resume=True`` continues an interrupted run from its last
+finished phase and generation without recomputing or losing anything.
+
+Run directory::
+
+    state.json        finished phases with their results, timings and evaluation counts
+    scenario.json     the replayed scenario (the input of every later phase)
+    accident.mcap     the replayed accident (recording mode)
+    physical.ckpt     physical search checkpoint (while it runs)
+    physical.json     the physical search: generations, chosen candidate
+    reference.mcap    the accident-free reference execution
+    diff.json         rocas diff between accident.mcap and reference.mcap
+    cyber.ckpt / cyber.json
+    fixed.mcap        the original scenario with the fixed configuration
+    report.json / report.md
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rocas._fs import write_text_atomic
+from rocas.errors import UsageError
+from rocas.pipeline.cyber import cyber_space
+from rocas.pipeline.evaluate import (
+    VariantResult,
+    VariantTask,
+    evaluate,
+    is_accident,
+    params_tuple,
+    violation,
+)
+from rocas.pipeline.physical import (
+    apply_physical,
+    describe,
+    entity_kinds,
+    entity_positions,
+    mutated_entities,
+    physical_space,
+)
+from rocas.scenarios.model import Scenario
+from rocas.search.executor import Executor, make_executor
+from rocas.search.ga import Candidate, GenerationStats, SearchConfig, SearchResult, run_search
+from rocas.search.minimize import shrink_magnitudes, shrink_set
+from rocas.search.objectives import ego_dissimilarity, scenario_dissimilarity, suspiciousness
+from rocas.search.space import Mutation, MutationSpace
+from rocas.sim.oracles import Outcome
+
+PHASES = ("replay", "physical", "diff", "cyber", "validation")
+VERDICTS = ("misconfiguration", "no_configuration_fix", "no_reference", "not_reproduced")
+
+
+@dataclass(frozen=True)
+class AnalyzeConfig:
+    """Settings of one analysis.
+
+    Attributes:
+        seed: seed of every search and of the validation variants.
+        budget: simulations per search phase (population x generations).
+        population: individuals per generation.
+        scope: "module" (search the deviating module's parameters) or "all" (the paper's
+            brute-force baseline: every parameter).
+        executor: registered executor name; workers: its worker count (None: all cores).
+        batch_size: variants per batch-mode simulation.
+        delta_s: Algorithm 1's window, also the h1 horizon cut [s].
+        validation_variants: perturbed variants in the regression test.
+        k_suspicion: K of f1 [m].
+        h1_limit_m2: a fix may change the ego's trajectory before the accident by at most
+            this MSE [m^2] (fixes beyond it count only when no other exists).
+    """
+
+    seed: int = 0
+    budget: int = 240
+    population: int = 24
+    scope: str = "module"
+    executor: str = "local"
+    workers: int | None = None
+    batch_size: int = 32
+    delta_s: float = 3.0
+    validation_variants: int = 200
+    k_suspicion: float = 10.0
+    h1_limit_m2: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.scope not in ("module", "all"):
+            raise UsageError(f"--scope must be module or all, not {self.scope!r}")
+        if self.budget < self.population:
+            raise UsageError(f"--budget must be at least the population ({self.population})")
+        if self.validation_variants < 0:
+            raise UsageError("--validation must be zero or positive")
+
+    def search(self, stage: int) -> SearchConfig:
+        return SearchConfig(population=self.population,
+                            generations=max(1, self.budget // self.population),
+                            seed=self.seed * 1000 + stage,
+                            single_property_share=1.0 if stage == 1 else 0.5,
+                            mutate_prob=0.3)
+
+
+@dataclass(frozen=True)
+class Accident:
+    """The accident of a run: kind ("collision" or "emergency"), time [s], other party."""
+
+    kind: str
+    time_s: float
+    other: str | None
+
+    @classmethod
+    def of(cls, o: Outcome) -> Accident | None:
+        if o.collided:
+            return cls("collision", float(o.collision_time_s or 0.0), o.collision_with)
+        if o.emergency:
+            times = [t for t in (o.hard_brake_time_s, o.estop_time_s) if t is not None]
+            return cls("emergency", float(min(times)) if times else 0.0, None)
+        return None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": self.kind, "time_s": round(self.time_s, 3), "other": self.other}
+
+
+Progress = Callable[[str, dict[str, Any]], None]
+
+
+def _noop(_: str, __: dict[str, Any]) -> None:
+    pass
+
+
+@dataclass
+class _Run:
+    """Everything phases share (rebuilt on resume from the run directory)."""
+
+    out: Path
+    cfg: AnalyzeConfig
+    executor: Executor
+    progress: Progress
+    state: dict[str, Any]
+    scenario: Scenario | None = None
+    original: VariantResult | None = None
+    accident: Accident | None = None
+    accident_tick: int = 0
+    evaluations: dict[str, int] = field(default_factory=dict)
+
+    def save(self) -> None:
+        write_text_atomic(self.out / "state.json", json.dumps(self.state, indent=2, default=_jsonable))
+
+    def done(self, phase: str) -> bool:
+        return phase in self.state["done"]
+
+    def finish(self, phase: str, result: dict[str, Any], seconds: float, evaluations: int = 0) -> None:
+        self.state["done"][phase] = result
+        self.state["timings_s"][phase] = round(seconds, 3)
+        self.state["evaluations"][phase] = evaluations
+        self.save()
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(type(x).__name__)
+
+
+def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig) -> dict[str, Any]:
+    """Create or reopen a run directory; returns its state."""
+    state_path = out / "state.json"
+    config = {k: getattr(cfg, k) for k in cfg.__dataclass_fields__ if k not in ("executor", "workers")}
+    if state_path.exists():
+        if not resume:
+            raise UsageError(f"run directory {out} already holds an analysis",
+                             "continue it with --resume, or choose another --out")
+        state = json.loads(state_path.read_text())
+        if state.get("source") != source or state.get("config") != config:
+            raise UsageError(f"run directory {out} holds an analysis of other inputs or settings",
+                             "choose another --out, or resume with the same input and options")
+        return state
+    if out.exists() and any(out.iterdir()):
+        raise UsageError(f"{out} exists and is not a rocas run directory", "choose another --out")
+    out.mkdir(parents=True, exist_ok=True)
+    return {"version": 1, "source": source, "config": config, "done": {}, "timings_s": {},
+            "evaluations": {}}
+
+
+# -- phase I: replay -------------------------------------------------------------------------
+def _phase_replay(run: _Run, scenario: Scenario | None, recording: Path | None) -> None:
+    from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
+    from rocas.sim.engine import simulate
+
+    if run.done("replay"):
+        run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
+    else:
+        t0 = time.perf_counter()
+        result: dict[str, Any] = {}
+        if recording is not None:
+            import rocas.replay as replay_mod
+
+            recon = replay_mod.reconstruct(recording)
+            report = replay_mod.replay(recon, output=run.out / "accident.mcap")
+            scenario = recon.scenario
+            result = {"reproduced": bool(report.reproduced), "ego_rmse_m": report.ego_rmse_m}
+        else:
+            assert scenario is not None
+            res = simulate(scenario, output=run.out / "accident.mcap")
+            result = {"reproduced": is_accident(res.outcome), "ego_rmse_m": 0.0}
+        run.scenario = scenario
+        write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
+        run.finish("replay", result, time.perf_counter() - t0, 1)
+    # the original run's trajectories are re-simulated (deterministic) rather than stored
+    (orig,) = evaluate(run.executor, [VariantTask(run.scenario, (), run.scenario.seed)])
+    run.original = orig
+    run.accident = Accident.of(orig.outcome)
+    dt = run.scenario.dt_s
+    run.accident_tick = int(round(run.accident.time_s / dt)) if run.accident else 0
+
+
+# -- phase II: physical mutation -------------------------------------------------------------
+def _phase_physical(run: _Run) -> dict[str, Any]:
+    from rocas.sim.engine import simulate
+
+    if run.done("physical"):
+        return run.state["done"]["physical"]
+    t0 = time.perf_counter()
+    scn, orig, tick = run.scenario, run.original, run.accident_tick
+    assert scn is not None and orig is not None
+    space = physical_space(scn)
+    positions = entity_positions(scn, orig.actors_xy[min(tick, len(orig.actors_xy) - 1)])
+    ego_xy = tuple(orig.ego_xy[tick])
+    prev = orig.ego_xy[max(tick - 1, 0)]
+    heading = float(np.arctan2(ego_xy[1] - prev[1], ego_xy[0] - prev[0])) if tick else 0.0
+    actor_ids = [a.id for a in scn.actors]
+    upto = tick + 1
+
+    def objectives(m: Mutation, r: VariantResult) -> tuple[tuple[float, ...], float]:
+        ents = mutated_entities(space, m)
+        f1 = suspiciousness([positions.get(e) for e in ents], ego_xy, heading, run.cfg.k_suspicion)
+        # f2 over every actor and the ego: a reference in which the ego already drives
+        # differently long before the accident is a poor reference for the diff
+        f2 = scenario_dissimilarity(
+            {"ego": orig.ego_xy[:upto], **{a: orig.actors_xy[:upto, i] for i, a in enumerate(actor_ids)}},
+            {"ego": r.ego_xy[:upto], **{a: r.actors_xy[:upto, i] for i, a in enumerate(actor_ids)}})
+        return (f1, f2, space.distance(m)), violation(r.outcome)
+
+    def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        tasks = [VariantTask(apply_physical(scn, m), (), scn.seed) for m in ms]
+        return [objectives(m, r) for m, r in zip(ms, evaluate(run.executor, tasks, run.cfg.batch_size),
+                                                 strict=True)]
+
+    res = run_search(space, batch, run.cfg.search(1), 3, checkpoint=run.out / "physical.ckpt",
+                     on_generation=lambda s: run.progress("physical", _gen_info(s)))
+    chosen = _choose_trigger(res)
+    result: dict[str, Any] = {"generations": [_gen_json(g) for g in res.generations],
+                              "evaluations": res.evaluations, "feasible": len(res.feasible),
+                              "front": [_cand_json(c) for c in res.front[:20]]}
+    if chosen is not None:
+        entity = mutated_entities(space, chosen.mutation)
+        result["chosen"] = _cand_json(chosen)
+        result["triggering_entity"] = {
+            "entity": entity[0] if entity else None,
+            "kind": entity_kinds(scn).get(entity[0]) if entity else None,
+            "entities": entity,
+            "properties": describe(space, chosen.mutation),
+        }
+        simulate(apply_physical(scn, chosen.mutation), output=run.out / "reference.mcap")
+    write_text_atomic(run.out / "physical.json", json.dumps(result, indent=1, default=_jsonable))
+    run.finish("physical", result, time.perf_counter() - t0, res.evaluations)
+    (run.out / "physical.ckpt").unlink(missing_ok=True)
+    return result
+
+
+#: f2 [m^2] within which front members count as equally similar to the original
+F2_TOLERANCE_M2 = 1.0
+
+
+def _choose_trigger(res: SearchResult) -> Candidate | None:
+    """From the feasible Pareto front: the executions most similar to the original (f2 within
+    F2_TOLERANCE_M2 of the best), then the fewest/smallest changes (f3), then the most
+    suspicious entity (f1)."""
+    if not res.front:
+        return None
+    best_f2 = min(c.objectives[1] for c in res.front)
+    similar = [c for c in res.front if c.objectives[1] <= best_f2 + F2_TOLERANCE_M2]
+    return min(similar, key=lambda c: (c.objectives[2], c.objectives[0], c.objectives[1],
+                                       c.mutation.names))
+
+
+# -- phase III: differential analysis --------------------------------------------------------
+def _phase_diff(run: _Run) -> dict[str, Any]:
+    from rocas.analysis.diff import diff
+
+    if run.done("diff"):
+        return run.state["done"]["diff"]
+    t0 = time.perf_counter()
+    result = diff(run.out / "accident.mcap", run.out / "reference.mcap", delta_s=run.cfg.delta_s)
+    data = result.to_json()
+    write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
+    summary = {"deviating_module": data["deviating_module"], "path": data["path"],
+               "control_channel": data["control_channel"]}
+    run.finish("diff", summary, time.perf_counter() - t0, 0)
+    return summary
+
+
+# -- phase IV: cyber mutation ----------------------------------------------------------------
+def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
+    from rocas.ads.params import ParamSet
+    from rocas.sim.engine import simulate
+
+    if run.done("cyber"):
+        return run.state["done"]["cyber"]
+    t0 = time.perf_counter()
+    scn, orig = run.scenario, run.original
+    assert scn is not None and orig is not None
+    current = dict(ParamSet(scn.ego.overrides))
+    space = cyber_space(module if run.cfg.scope == "module" else None, current)
+    horizon = max(1, run.accident_tick - int(round(run.cfg.delta_s / scn.dt_s)))
+
+    def overrides(m: Mutation) -> tuple[tuple[str, float], ...]:
+        return params_tuple({k: float(v) for k, v in m.values.items()})
+
+    def run_fixes(ms: list[Mutation]) -> list[VariantResult]:
+        tasks = [VariantTask(scn, overrides(m), scn.seed) for m in ms]
+        return evaluate(run.executor, tasks, run.cfg.batch_size)
+
+    def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        return [((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), space.distance(m)),
+                 violation(r.outcome)) for m, r in zip(ms, run_fixes(ms), strict=True)]
+
+    res = run_search(space, batch, run.cfg.search(2), 2, checkpoint=run.out / "cyber.ckpt",
+                     on_generation=lambda s: run.progress("cyber", _gen_info(s)))
+    result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
+                              "generations": [_gen_json(g) for g in res.generations],
+                              "evaluations": res.evaluations, "feasible": len(res.feasible),
+                              "first_fix_evaluation": _first_fix(res)}
+    chosen = _choose_fix(res, run.cfg.h1_limit_m2)
+    evaluations = res.evaluations
+    if chosen is not None:
+        limit = max(run.cfg.h1_limit_m2, chosen.objectives[0])
+
+        def holds(ms: list[Mutation]) -> list[bool]:
+            return [not is_accident(r.outcome) and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
+                    for r in run_fixes(ms)]
+
+        run.progress("minimise", {"parameters": len(chosen.mutation.values)})
+        small, n1 = shrink_set(chosen.mutation, holds)
+        small, n2 = shrink_magnitudes(small, space, holds)
+        evaluations += n1 + n2
+        result["search_best"] = _cand_json(chosen)
+        result["minimise_evaluations"] = n1 + n2
+        result["fix"] = {k: float(v) for k, v in small.values.items()}
+        result["misconfiguration"] = [
+            {"module": n.split(".", 1)[0], "parameter": n, "original": space.variable(n).original,
+             "mutated": small.values[n]} for n in small.names]
+        simulate(scn, params=result["fix"], output=run.out / "fixed.mcap")
+    write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=_jsonable))
+    run.finish("cyber", result, time.perf_counter() - t0, evaluations)
+    (run.out / "cyber.ckpt").unlink(missing_ok=True)
+    return result
+
+
+def _first_fix(res: SearchResult) -> int | None:
+    for i, c in enumerate(res.candidates, 1):
+        if c.feasible:
+            return i
+    return None
+
+
+def _choose_fix(res: SearchResult, h1_limit: float) -> Candidate | None:
+    """Among feasible fixes that keep the ego's earlier trajectory (h1 <= limit), the
+    smallest change (h2); when none keeps it, the one that changes it least."""
+    feasible = res.feasible
+    if not feasible:
+        return None
+    keep = [c for c in feasible if c.objectives[0] <= h1_limit]
+    if keep:
+        return min(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names))
+    return min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))
+
+
+# -- phase V: validation ---------------------------------------------------------------------
+def perturbed_variants(scenario: Scenario, count: int, seed: int) -> list[Scenario]:
+    """``count`` variants of ``scenario``: actor speeds scaled by U(0.95, 1.05), start
+    positions moved by U(-2, 2) m, and a new simulation seed each."""
+    import dataclasses
+
+    rng = np.random.default_rng(seed + 7)
+    out = []
+    for k in range(count):
+        actors = []
+        for a in scenario.actors:
+            scale = float(rng.uniform(0.95, 1.05))
+            ds = float(rng.uniform(-2.0, 2.0))
+            actors.append(dataclasses.replace(
+                a, start_s_m=max(0.0, a.start_s_m + ds),
+                speed_profile=tuple((t, v * scale) for t, v in a.speed_profile)))
+        out.append(dataclasses.replace(scenario, actors=tuple(actors), seed=scenario.seed + 1 + k))
+    return out
+
+
+def _phase_validation(run: _Run, fix: dict[str, float]) -> dict[str, Any]:
+    if run.done("validation"):
+        return run.state["done"]["validation"]
+    t0 = time.perf_counter()
+    assert run.scenario is not None
+    variants = perturbed_variants(run.scenario, run.cfg.validation_variants, run.cfg.seed)
+    fixed = params_tuple(fix)
+    tasks = [VariantTask(v, (), v.seed) for v in variants] + [VariantTask(v, fixed, v.seed) for v in variants]
+    run.progress("validation", {"variants": len(variants)})
+    res = evaluate(run.executor, tasks, run.cfg.batch_size)
+    n = len(variants)
+    ok_orig = sum(not is_accident(r.outcome) for r in res[:n])
+    ok_fixed = sum(not is_accident(r.outcome) for r in res[n:])
+    result = {"variants": n,
+              "success_rate_original": ok_orig / n if n else None,
+              "success_rate_fixed": ok_fixed / n if n else None,
+              "fix_makes_it_worse": bool(n and ok_fixed < ok_orig)}
+    run.finish("validation", result, time.perf_counter() - t0, 2 * n)
+    return result
+
+
+# -- orchestration ---------------------------------------------------------------------------
+def _gen_info(s: GenerationStats) -> dict[str, Any]:
+    return {"generation": s.generation, "evaluations": s.evaluations, "feasible": s.feasible,
+            "best_constraint": s.best_constraint}
+
+
+def _gen_json(s: GenerationStats) -> dict[str, Any]:
+    return {**_gen_info(s), "objectives": s.objectives.tolist(), "constraints": s.constraints.tolist()}
+
+
+def _cand_json(c: Candidate) -> dict[str, Any]:
+    return {"mutation": dict(c.mutation.values), "objectives": list(c.objectives),
+            "constraint": c.constraint, "generation": c.generation}
+
+
+def analyze(
+    source: str | os.PathLike[str] | Scenario,
+    out: str | os.PathLike[str],
+    cfg: AnalyzeConfig = AnalyzeConfig(),
+    *,
+    resume: bool = False,
+    progress: Progress = _noop,
+    executor: Executor | None = None,
+) -> dict[str, Any]:
+    """Run (or resume) the whole analysis; returns the report object (``--json``).
+
+    Args:
+        source: an accident recording (replayed) or a Scenario (simulated as the accident).
+        out: the run directory.
+        cfg: settings.
+        resume: continue the analysis already in ``out``.
+        progress: ``progress(phase, info)`` called as the phases advance.
+        executor: an executor to use instead of ``cfg.executor``/``cfg.workers``.
+    """
+    out = Path(out)
+    scenario = source if isinstance(source, Scenario) else None
+    recording = None if scenario is not None else Path(source)  # type: ignore[arg-type]
+    label = f"scenario:{scenario.name}" if scenario is not None else str(Path(source).resolve())  # type: ignore[arg-type]
+    state = prepare_run_dir(out, resume, label, cfg)
+    own = executor is None
+    ex = executor if executor is not None else make_executor(cfg.executor, cfg.workers)
+    run = _Run(out, cfg, ex, progress, state)
+    try:
+        return _analyze(run, scenario, recording)
+    finally:
+        if own:
+            ex.close()
+
+
+def _analyze(run: _Run, scenario: Scenario | None, recording: Path | None) -> dict[str, Any]:
+    from rocas.pipeline.report import build_report, write_report
+
+    run.progress("replay", {})
+    _phase_replay(run, scenario, recording)
+    replay = run.state["done"]["replay"]
+    if not replay["reproduced"] or run.accident is None:
+        return write_report(run.out, build_report(run.state, run.accident, "not_reproduced"))
+    physical = _phase_physical(run)
+    if "chosen" not in physical:
+        return write_report(run.out, build_report(run.state, run.accident, "no_reference"))
+    run.progress("diff", {})
+    diff = _phase_diff(run)
+    cyber = _phase_cyber(run, diff["deviating_module"])
+    if "fix" not in cyber:
+        return write_report(run.out, build_report(run.state, run.accident, "no_configuration_fix"))
+    _phase_validation(run, cyber["fix"])
+    return write_report(run.out, build_report(run.state, run.accident, "misconfiguration"))
+
+
+def search_space_of(module: str | None) -> MutationSpace:
+    """The parameter space a cyber search with this module would explore (for reports)."""
+    return cyber_space(module, {})

@@ -1,0 +1,27 @@
+"""Phase IV: cyber mutation over the ADS parameters (section 5.3)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from rocas.ads.params import MODULES, parameters
+from rocas.errors import UsageError
+from rocas.search.space import MutationSpace, Variable
+
+
+def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpace:
+    """The parameters of ``module`` (all modules when None) as a mutation space.
+
+    Args:
+        module: the initial deviating module, or None for ``--scope all``.
+        current: the values in force in the accident run (defaults plus overrides).
+    """
+    if module is not None and module not in MODULES:
+        raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(MODULES)}")
+    out = []
+    for p in parameters(module):
+        value = float(current.get(p.full_name, p.default))
+        kind = "int" if p.is_integer else "real"
+        out.append(Variable(p.full_name, p.module, kind, int(value) if kind == "int" else value,
+                            low=p.low, high=p.high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
+    return MutationSpace(tuple(out))

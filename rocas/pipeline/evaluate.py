@@ -1,0 +1,101 @@
+"""Simulations as pure functions of picklable inputs, fanned out over an executor.
+
+A :class:`VariantTask` (scenario, parameter overrides, seed) maps to a :class:`VariantResult`
+(outcome and trajectories). Tasks are grouped into batches for the simulator's batch mode and
+the batches are mapped over an executor; since a variant's result does not depend on the
+batch it runs in, the results depend only on the tasks: the same whatever the batch size,
+the number of workers or the executor.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.scenarios.model import Scenario
+from rocas.search.executor import Executor
+from rocas.sim.oracles import Outcome
+
+
+@dataclass(frozen=True)
+class VariantTask:
+    """One simulation to run.
+
+    Attributes:
+        scenario: the (possibly mutated) scenario.
+        params: ADS parameter overrides on top of the scenario's own.
+        seed: the simulation seed.
+    """
+
+    scenario: Scenario
+    params: tuple[tuple[str, float], ...] = ()
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class VariantResult:
+    """What a search needs from one simulation.
+
+    Attributes:
+        outcome: the oracles' verdict.
+        ego_xy: (T + 1, 2) ego positions [m].
+        actors_xy: (T + 1, A, 2) actor positions [m].
+    """
+
+    outcome: Outcome
+    ego_xy: np.ndarray
+    actors_xy: np.ndarray
+
+
+def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
+    """Simulate tasks that share one scenario structure in one batch (picklable entry point)."""
+    from rocas.sim.engine import simulate_batch
+
+    res = simulate_batch([t.scenario for t in tasks], params=[dict(t.params) for t in tasks],
+                         seeds=[t.seed for t in tasks])
+    return [
+        VariantResult(res.outcomes[i], np.ascontiguousarray(res.ego[i, :, :2]),
+                      np.ascontiguousarray(res.actors[i, :, :, :2]))
+        for i in range(len(tasks))
+    ]
+
+
+def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int = 32
+             ) -> list[VariantResult]:
+    """Run ``tasks`` in batches of ``batch_size`` on ``executor``; results in task order."""
+    tasks = list(tasks)
+    if not tasks:
+        return []
+    per_worker = max(1, -(-len(tasks) // max(1, getattr(executor, "workers", 1))))
+    size = max(1, min(batch_size, per_worker))
+    batches = [tasks[i:i + size] for i in range(0, len(tasks), size)]
+    out: list[VariantResult] = []
+    for chunk in executor.map(run_batch, batches):
+        out.extend(chunk)
+    return out
+
+
+def params_tuple(overrides: Mapping[str, float]) -> tuple[tuple[str, float], ...]:
+    return tuple(sorted((k, float(v)) for k, v in overrides.items()))
+
+
+def is_accident(outcome: Outcome) -> bool:
+    """A collision or an emergency (hard brake, estop, unexpected stop)."""
+    return bool(outcome.collided or outcome.emergency)
+
+
+def violation(outcome: Outcome) -> float:
+    """The graded constraint: <= 0 when the run is accident-free, > 0 otherwise.
+
+    Accident runs score 1 plus how bad they were (penetration depth [m] for collisions,
+    deceleration beyond 4 m/s^2 for emergencies, in units of 4 m/s^2); accident-free runs
+    score minus their safety margin (minimum separation, capped at 2 m, halved), so among
+    feasible runs the safer ones are preferred.
+    """
+    if outcome.collided:
+        return 1.0 + max(0.0, -outcome.min_separation_m)
+    if outcome.emergency:
+        return 1.0 + max(0.0, outcome.max_decel_mps2 - 4.0) / 4.0
+    return -min(max(outcome.min_separation_m, 0.0), 2.0) / 2.0

@@ -1,0 +1,112 @@
+"""The report of ``rocas analyze``: one JSON object, a markdown verdict, a terminal view."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from rocas._fs import write_text_atomic
+
+EXPLANATIONS = {
+    "misconfiguration": (
+        "Changing {entity_phrase} avoids the accident, and the two executions first diverge in "
+        "module {module}. Changing {params} in that module avoids the accident while the ego drives "
+        "as before until {horizon:.1f} s: the accident is attributed to this configuration."),
+    "no_configuration_fix": (
+        "Changing {entity_phrase} avoids the accident and the executions first diverge in module "
+        "{module_or_none}, but no configuration of {scope} within the search budget avoids it without "
+        "changing the ego's earlier trajectory. This points to a missing feature or a limit of the "
+        "system rather than a misconfiguration."),
+    "no_reference": (
+        "No small change of the world within the search budget avoids the accident, so there is no "
+        "accident-free reference execution to compare with; the analysis stops here. A larger "
+        "--budget may find one."),
+    "not_reproduced": (
+        "Replaying the recording did not reproduce the accident (see the replay figures), so the "
+        "later phases would analyse a different execution; the analysis stops here."),
+}
+
+
+def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str, Any]:
+    """The report object (``--json``) from a run directory's state."""
+    done = state["done"]
+    physical = done.get("physical", {})
+    diff = done.get("diff", {})
+    cyber = done.get("cyber", {})
+    trig = physical.get("triggering_entity")
+    module = diff.get("deviating_module")
+    mis = cyber.get("misconfiguration", [])
+    from rocas.ads.params import PARAMETERS
+
+    searched = cyber.get("parameters")
+    report = {
+        "verdict": verdict,
+        "explanation": "",
+        "accident": accident.to_json() if accident is not None else None,
+        "replay": done.get("replay"),
+        "triggering_entity": trig,
+        "deviating_module": module,
+        "path": diff.get("path", []),
+        "misconfiguration": mis,
+        "validation": done.get("validation"),
+        "search_space": {"parameters_searched": searched, "parameters_total": len(PARAMETERS),
+                         "reduction": (1 - searched / len(PARAMETERS)) if searched else None,
+                         "scope": cyber.get("scope")},
+        "first_fix_evaluation": cyber.get("first_fix_evaluation"),
+        "evaluations": dict(state["evaluations"]),
+        "timings_s": dict(state["timings_s"]),
+    }
+    entity_phrase = "the world"
+    if trig:
+        props = ", ".join(f"{p['name']} from {_fmt(p['original'])} to {_fmt(p['mutated'])}"
+                          for p in trig["properties"])
+        entity_phrase = f"{trig['entity']} ({props})"
+    params = ", ".join(f"{m['parameter']} from {_fmt(m['original'])} to {_fmt(m['mutated'])}" for m in mis)
+    horizon = (accident.time_s - state["config"]["delta_s"]) if accident is not None else 0.0
+    report["explanation"] = EXPLANATIONS[verdict].format(
+        entity_phrase=entity_phrase, module=module, module_or_none=module or "(none found)",
+        params=params or "-", horizon=max(horizon, 0.0),
+        scope=f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS")
+    return report
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def markdown(report: dict[str, Any]) -> str:
+    """The verdict as a markdown document (report.md, the Rerun verdict view)."""
+    lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
+    acc = report["accident"]
+    if acc:
+        other = f" with {acc['other']}" if acc.get("other") else ""
+        lines.append(f"- **Accident**: {acc['kind']}{other} at {acc['time_s']:.2f} s")
+    trig = report["triggering_entity"]
+    if trig:
+        for p in trig["properties"]:
+            lines.append(f"- **Triggering entity**: {trig['entity']} ({trig['kind']}): "
+                         f"{p['name']} {_fmt(p['original'])} → {_fmt(p['mutated'])}")
+    if report["deviating_module"]:
+        lines.append(f"- **Deviating module**: {report['deviating_module']} "
+                     f"(walk: {' → '.join(report['path'])})")
+    for m in report["misconfiguration"]:
+        lines.append(f"- **Misconfiguration**: {m['parameter']} {_fmt(m['original'])} → {_fmt(m['mutated'])}")
+    v = report["validation"]
+    if v and v["variants"]:
+        lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "
+                     f"{100 * v['success_rate_original']:.0f} % with the original configuration, "
+                     f"{100 * v['success_rate_fixed']:.0f} % with the fix"
+                     + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else ""))
+    t = report["timings_s"]
+    lines.append("- **Time**: " + ", ".join(f"{k} {s:.1f} s" for k, s in t.items()))
+    lines.append("- **Simulations**: " + ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
+    return "\n".join(lines) + "\n"
+
+
+def write_report(out: Path, report: dict[str, Any]) -> dict[str, Any]:
+    write_text_atomic(out / "report.json", json.dumps(report, indent=2))
+    write_text_atomic(out / "report.md", markdown(report))
+    return report

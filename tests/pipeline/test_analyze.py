@@ -1,0 +1,87 @@
+"""rocas analyze end to end on a shipped example (small budgets: these check the machinery;
+accuracy over the catalog is measured by `rocas bench`)."""
+
+import json
+
+import pytest
+
+from rocas.errors import UsageError
+from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
+from rocas.scenarios import load_example
+from rocas.search import LocalExecutor, SerialExecutor
+
+CFG = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=4)
+REPORT_KEYS = {"verdict", "accident", "triggering_entity", "deviating_module", "misconfiguration",
+               "validation", "evaluations", "timings_s"}
+
+
+def _stable(report):
+    return {k: v for k, v in report.items() if k != "timings_s"}
+
+
+@pytest.fixture(scope="module")
+def red_truck():
+    return load_example("roundabout_red_truck")
+
+
+@pytest.fixture(scope="module")
+def serial_run(red_truck, tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial") / "run"
+    return out, analyze(red_truck, out, CFG, executor=SerialExecutor())
+
+
+def test_report_has_the_documented_keys_and_files(serial_run):
+    out, report = serial_run
+    assert REPORT_KEYS <= set(report)
+    assert report["verdict"] in VERDICTS
+    assert report["accident"]["kind"] == "emergency"
+    for name in ("state.json", "scenario.json", "accident.mcap", "report.json", "report.md"):
+        assert (out / name).exists(), name
+    assert json.loads((out / "report.json").read_text()) == report
+    if report["triggering_entity"]:
+        assert (out / "reference.mcap").exists() and (out / "diff.json").exists()
+        assert report["evaluations"]["physical"] > 0
+
+
+def test_same_result_whatever_the_executor(red_truck, serial_run, tmp_path):
+    _, serial = serial_run
+    with LocalExecutor(workers=2) as pool:
+        parallel = analyze(red_truck, tmp_path / "run", CFG, executor=pool)
+    assert _stable(parallel) == _stable(serial)
+
+
+def test_resume_after_an_interruption_gives_the_same_report(red_truck, serial_run, tmp_path):
+    _, serial = serial_run
+    out = tmp_path / "run"
+
+    def stop_at_diff(phase, info):
+        if phase == "diff":
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, out, CFG, executor=SerialExecutor(), progress=stop_at_diff)
+    state = json.loads((out / "state.json").read_text())
+    assert set(state["done"]) == {"replay", "physical"}
+    physical_written = (out / "physical.json").stat().st_mtime_ns
+    resumed = analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)
+    assert _stable(resumed) == _stable(serial)
+    assert (out / "physical.json").stat().st_mtime_ns == physical_written  # not recomputed
+
+
+def test_an_existing_run_dir_needs_resume(red_truck, serial_run):
+    out, _ = serial_run
+    with pytest.raises(UsageError, match="--resume"):
+        analyze(red_truck, out, CFG, executor=SerialExecutor())
+    with pytest.raises(UsageError, match="other inputs or settings"):
+        analyze(red_truck, out, AnalyzeConfig(seed=2, budget=16, population=8), resume=True,
+                executor=SerialExecutor())
+
+
+def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):
+    from rocas.pipeline.physical import apply_physical
+    from rocas.search.space import Mutation
+
+    brown = apply_physical(red_truck, Mutation({"actor.red_truck.color": "brown"}))
+    report = analyze(brown, tmp_path / "run", CFG, executor=SerialExecutor())
+    assert report["verdict"] == "not_reproduced"
+    assert report["triggering_entity"] is None and report["misconfiguration"] == []
