@@ -19,6 +19,8 @@ PROFILE_TOLERANCE_MPS = 0.05  # [m/s] speed-profile knots are dropped within thi
 STATION_GAIN = 1.0           # [1/s^2] position feedback of the profile design
 SPEED_GAIN = 2.0             # [1/s] speed feedback of the profile design
 MAX_SPEED_MPS = 40.0
+ENTRY_MOVING_MPS = 0.5       # [m/s] slower at its first sighting: it stood there before
+ENDPOINT_WINDOW_S = 1.0      # [s] window of the entry and exit velocity estimates
 
 
 def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -111,35 +113,39 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     last speed along the map (first successors).
     """
     t0, t1 = float(track.times[0]), float(track.times[-1])
-    v0, v1 = float(track.speed[0]), float(track.speed[-1])
-    core = _thin(track.xy, WAYPOINT_SPACING_M)
-    moving = len(core) >= 2
+    # entry speed: the smaller of the derivative at the first sighting and the mean over the
+    # first second (a standing pedestrian's noise must not set it walking before it was seen)
+    vw, hw = track.velocity_between(t0, t0 + ENDPOINT_WINDOW_S)
+    v0 = min(float(track.speed[0]), vw)
+    h0 = float(track.heading[0]) if track.speed[0] > 1.0 else hw
+    v1, h1 = float(track.speed[-1]), float(track.heading[-1])
+    v0 = v0 if v0 >= ENTRY_MOVING_MPS else 0.0  # else it stood there before it was seen
+    keep = np.ones(len(track.times), dtype=bool)
+    times, xy = track.times[keep], track.xy[keep]
+    core = _thin(xy, WAYPOINT_SPACING_M)
+    moving = len(core) >= 2 and not track.stationary
     back_len = v0 * t0 if moving else 0.0
     fwd_len = v1 * max(duration_s - t1, 0.0) + 5.0
-    back = walk_lanes(lanes, core[0], float(track.heading[0]), back_len, forward=False)
+    back = walk_lanes(lanes, core[0], h0, back_len, forward=False)
     if not moving:
         h = track.heading_at(t0)
         d = 0.25 * np.array([np.cos(h), np.sin(h)])
-        core = np.vstack([core[0] - d, core[0] + d])
-    fwd = walk_lanes(lanes, core[-1], float(track.heading[-1]), fwd_len, forward=True) \
+        core = np.vstack([xy[0] - d, xy[0] + d])
+    fwd = walk_lanes(lanes, core[-1], h1, fwd_len, forward=True) \
         if moving else np.zeros((0, 2))
     path = _thin(np.vstack([back, core, fwd]), 0.05)
     start_core = float(_arc(np.vstack([back, core[:1]]))[-1]) if len(back) else 0.0
-    if moving:
-        s_core = start_core + _progress(core, track.xy)
-    else:
-        s_core = np.full(len(track.times), 0.25)
-    times = [np.array([0.0])] if t0 > 0 else []
-    s_knots = [np.array([s_core[0] - v0 * t0])] if t0 > 0 else []
-    times.append(track.times)
-    s_knots.append(s_core)
+    s_core = start_core + _progress(core, xy) if moving else np.full(len(times), 0.25)
+    tt = [np.array([0.0])] if t0 > 0 else []
+    ss = [np.array([s_core[0] - v0 * t0])] if t0 > 0 else []
+    tt.append(times)
+    ss.append(s_core)
     if t1 < duration_s:
-        times.append(np.array([duration_s + 1.0]))
-        s_knots.append(np.array([s_core[-1] + v1 * (duration_s + 1.0 - t1)]))
-    tt = np.concatenate(times)
-    ss = np.concatenate(s_knots)
-    start = max(float(ss[0]), 0.0)
-    profile = design_profile(tt, ss - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
+        tt.append(np.array([duration_s + 1.0]))
+        ss.append(np.array([s_core[-1] + v1 * (duration_s + 1.0 - t1)]))
+    t_all, s_all = np.concatenate(tt), np.concatenate(ss)
+    start = max(float(s_all[0]), 0.0)
+    profile = design_profile(t_all, s_all - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
     return Actor(
         id=track.name, kind=track.kind, model=track.model, color=track.color, route=(),
         waypoints=tuple((round(float(x), 4), round(float(y), 4)) for x, y in path),

@@ -34,6 +34,7 @@ REIDENTIFY_GATE_M = 3.0     # [m] largest distance of the later piece from the w
 LONG_GAP_PENALTY = 100.0    # long-gap links rank after every short-gap link
 SMOOTH_SIGMA_S = 0.25       # [s] Gaussian kernel of the smoother
 MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurious
+STATIC_SPREAD_M = 0.8       # [m] a track whose detections stay this close to their median is parked
 MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
 DEFAULT_COLOR = "white"     # used when the colour was never recognised
 
@@ -60,6 +61,7 @@ class Track:
         kind, model, color: scenario actor kind, vehicle model, colour name.
         size: (3,) median perceived length, width, height [m].
         notes: what was assumed (unknown colour, class from size, ...).
+        stationary: never moved (pose = median of the detections).
     """
 
     track_ids: tuple[int, ...]
@@ -73,6 +75,21 @@ class Track:
     color: str
     size: np.ndarray
     notes: tuple[str, ...] = ()
+    stationary: bool = False
+
+    def velocity_between(self, t_a: float, t_b: float) -> tuple[float, float]:
+        """(speed [m/s], heading [rad]) of the displacement between two times of the track:
+        steadier than the derivative at a track's end."""
+        if len(self.times) < 2 or self.stationary:
+            return 0.0, float(self.heading_at(t_a))
+        t_a = max(t_a, float(self.times[0]))
+        t_b = min(max(t_b, t_a + 1e-6), float(self.times[-1]))
+        pa, pb = self.position_at(t_a), self.position_at(t_b)
+        assert pa is not None and pb is not None
+        d = pb - pa
+        speed = float(np.hypot(*d)) / max(t_b - t_a, 1e-9)
+        heading = float(np.arctan2(d[1], d[0])) if speed > 0.2 else self.heading_at(t_a)
+        return speed, heading
 
     @property
     def name(self) -> str:
@@ -315,19 +332,25 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = ()) -
         if len(rows) < MIN_DETECTIONS:
             continue
         grid, xy, perceived, observed = _resample(d, chain, period_s)
-        xy = smooth(grid, xy)
-        if len(grid) > 1:
-            vel = np.gradient(xy, grid, axis=0)
-        else:
-            vel = d.velocity[rows[:1]].copy()
-        speed = np.hypot(vel[:, 0], vel[:, 1])
-        heading = np.where(speed > MOVING_SPEED_MPS, np.arctan2(vel[:, 1], vel[:, 0]),
-                           perceived)
         kind, model, color, size, notes = _classify(d, rows)
+        raw = d.xy[rows]
+        centre = np.median(raw, axis=0)
+        stationary = bool(np.percentile(np.hypot(*(raw - centre).T), 90) < STATIC_SPREAD_M)
+        if stationary:  # parked: the median pose, not a drift of tracker noise
+            xy = np.repeat(centre[None], len(grid), 0)
+            speed = np.zeros(len(grid))
+            h2 = 2.0 * d.heading[rows]
+            heading = np.full(len(grid), 0.5 * np.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
+        else:
+            xy = smooth(grid, xy)
+            vel = np.gradient(xy, grid, axis=0)
+            speed = np.hypot(vel[:, 0], vel[:, 1])
+            heading = np.where(speed > MOVING_SPEED_MPS, np.arctan2(vel[:, 1], vel[:, 0]),
+                               perceived)
         tracks.append(Track(
             track_ids=tuple(p.track_id for p in chain), times=grid, xy=xy,
             heading=wrap(heading), speed=speed, observed=observed, kind=kind, model=model,
-            color=color, size=size, notes=tuple(notes)))
+            color=color, size=size, notes=tuple(notes), stationary=stationary))
     return sorted(tracks, key=lambda tr: tr.track_ids[0])
 
 
