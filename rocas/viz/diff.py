@@ -79,8 +79,13 @@ def report_markdown(result: DiffResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def log_diff(rec: Any, result: DiffResult, prefix: str = "diff") -> None:
-    """Log a diff result into an open ``rerun.RecordingStream``."""
+def log_diff(rec: Any, result: DiffResult, prefix: str = "diff",
+             timelines: tuple[str, ...] = ("time",)) -> None:
+    """Log a diff result into an open ``rerun.RecordingStream``.
+
+    ``timelines``: the timelines the series are indexed on (the analysis ``.rrd`` adds
+    ``sim_time`` so that MDR plots and the scene share one time cursor).
+    """
     import rerun as rr
 
     for c in result.channels:
@@ -90,7 +95,7 @@ def log_diff(rec: Any, result: DiffResult, prefix: str = "diff") -> None:
         name = entity_name(c.topic)
         rec.send_columns(
             f"{prefix}/mdr/{name}",
-            indexes=[rr.TimeColumn("time", duration=s.times_s)],
+            indexes=[rr.TimeColumn(tl, duration=s.times_s) for tl in timelines],
             columns=rr.Scalars.columns(scalars=s.mdr),
         )
         rec.log(f"{prefix}/mdr/{name}", rr.SeriesLines(names=c.topic), static=True)
@@ -98,7 +103,7 @@ def log_diff(rec: Any, result: DiffResult, prefix: str = "diff") -> None:
         if len(idx):
             rec.send_columns(
                 f"{prefix}/change_points/{name}",
-                indexes=[rr.TimeColumn("time", duration=s.times_s[idx])],
+                indexes=[rr.TimeColumn(tl, duration=s.times_s[idx]) for tl in timelines],
                 columns=rr.Scalars.columns(scalars=s.mdr[idx]),
             )
             rec.log(
@@ -108,7 +113,7 @@ def log_diff(rec: Any, result: DiffResult, prefix: str = "diff") -> None:
             )
             rec.send_columns(
                 f"{prefix}/events",
-                indexes=[rr.TimeColumn("time", duration=s.times_s[idx])],
+                indexes=[rr.TimeColumn(tl, duration=s.times_s[idx]) for tl in timelines],
                 columns=rr.TextLog.columns(
                     text=[f"{c.topic}: MDR change point at {s.times_s[i]:.2f} s" for i in idx],
                     level=["INFO"] * len(idx),

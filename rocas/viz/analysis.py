@@ -1,0 +1,426 @@
+"""The whole analysis in one ``.rrd``: executions, differential analysis, searches, verdict.
+
+Entity layout::
+
+    executions/<name>/...       scene and signals of each execution (rocas.viz.scene, .signals);
+                                name: accident, reference, fixed; timeline ``sim_time`` [s]
+    diff/...                    the differential analysis (rocas.viz.diff), on ``time`` and
+                                ``sim_time``
+    search/<phase>/...          search progress (rocas.viz.search), timeline ``generation``
+    verdict                     the report as a markdown document
+
+The default blueprint shows the scene (one tab per execution), the module signals, the MDR
+plots, the channel-module graph and the verdict at once; the search plots sit in tabs beside
+the verdict (they need the ``generation`` timeline selected in the time panel).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rocas.errors import InputError
+from rocas.viz.scene import BACKGROUND_RGB, TIMELINE, Execution, load_execution, log_scene
+from rocas.viz.signals import log_signals
+from rocas.viz.stream import rrd_recording
+
+if TYPE_CHECKING:
+    from rocas.analysis.diff import DiffResult
+    from rocas.search.ga import GenerationStats
+
+EXECUTIONS = ("accident", "reference", "fixed")
+VERDICT_ENTITY = "verdict"
+RUN_FILES = (
+    "accident.mcap",
+    "reference.mcap",
+    "fixed.mcap",
+    "diff.json",
+    "physical.json",
+    "cyber.json",
+    "report.md",
+    "report.json",
+)
+
+
+def log_verdict(rec: Any, markdown: str, entity: str = VERDICT_ENTITY) -> None:
+    """Log the verdict (a markdown string) as a static text document."""
+    import rerun as rr
+
+    rec.log(entity, rr.TextDocument(markdown, media_type="text/markdown"), static=True)
+
+
+def log_execution(
+    rec: Any,
+    name: str,
+    execution: Execution | str | os.PathLike[str],
+    *,
+    highlight: Iterable[str] = (),
+    channels: bool = True,
+) -> Execution:
+    """Log the scene and the signals of one execution under ``executions/<name>``."""
+    ex = execution if isinstance(execution, Execution) else load_execution(execution)
+    prefix = f"executions/{name}"
+    log_scene(rec, ex, prefix, highlight=highlight, label=name)
+    log_signals(rec, ex, prefix, label=name, channels=channels)
+    return ex
+
+
+def scene_bounds(
+    ex: Execution | None, half_width_m: float = 45.0, half_height_m: float = 22.0
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """(x range, y range) [m] framing the accident (else the ego's whole path), or None."""
+    if ex is None or len(ex.ego_t) == 0:
+        return None
+    acc = ex.accident()
+    if acc is not None and ex.ego_at(acc[0]) is not None:
+        x, y, _ = ex.ego_at(acc[0])  # type: ignore[misc]
+        if acc[2] is not None:
+            x, y = acc[2]
+        return (x - half_width_m, x + half_width_m), (y - half_height_m, y + half_height_m)
+    lo, hi = ex.ego_xy.min(axis=0) - 15.0, ex.ego_xy.max(axis=0) + 15.0
+    return (float(lo[0]), float(hi[0])), (float(lo[1]), float(hi[1]))
+
+
+def _scene_view(name: str, ex: Execution | None = None) -> Any:
+    import rerun.blueprint as rrb
+
+    bounds = scene_bounds(ex)
+    return rrb.Spatial2DView(
+        origin=f"executions/{name}",
+        contents=["+ $origin/world/**", "+ $origin/ego/**", "+ $origin/actors/**", "+ $origin/accident"],
+        name=f"Scene: {name}",
+        background=BACKGROUND_RGB,
+        visual_bounds=None if bounds is None else rrb.VisualBounds2D(x_range=bounds[0], y_range=bounds[1]),
+    )
+
+
+def _signal_views(names: Sequence[str], with_brake: bool) -> list[Any]:
+    import rerun.blueprint as rrb
+
+    views = [
+        rrb.TimeSeriesView(
+            origin="executions",
+            contents=[f"+ executions/{n}/signals/speed" for n in names],
+            name="Speed [m/s]",
+        ),
+        rrb.TimeSeriesView(
+            origin="executions",
+            contents=[f"+ executions/{n}/signals/acceleration/**" for n in names],
+            name="Acceleration [m/s²]",
+        ),
+    ]
+    if with_brake:
+        views.append(
+            rrb.TimeSeriesView(
+                origin="executions",
+                contents=[f"+ executions/{n}/signals/brake/**" for n in names],
+                name="Brake classifier",
+                axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+            )
+        )
+    views.append(
+        rrb.TextLogView(
+            origin="executions",
+            contents=[f"+ executions/{n}/signals/decisions" for n in names]
+            + [f"+ executions/{n}/events" for n in names],
+            name="Decisions and events",
+        )
+    )
+    return views
+
+
+def analysis_blueprint(
+    executions: Sequence[str] = EXECUTIONS,
+    *,
+    diff: bool = True,
+    searches: Sequence[str] = (),
+    verdict: bool = True,
+    brake: bool = True,
+    focus: Execution | None = None,
+) -> Any:
+    """The default layout: scene + signals left; MDR, CMG and verdict (+ searches) right.
+
+    ``focus``: the execution whose accident the scene views frame (default: the whole map).
+    """
+    import rerun.blueprint as rrb
+
+    scenes = [_scene_view(n, focus) for n in executions]
+    left = rrb.Vertical(
+        rrb.Tabs(*scenes, active_tab=0) if len(scenes) > 1 else scenes[0],
+        rrb.Tabs(*_signal_views(executions, brake), active_tab=0),
+        row_shares=[3, 2],
+    )
+    right_parts: list[Any] = []
+    if diff:
+        right_parts.append(rrb.TimeSeriesView(origin="diff/mdr", name="MDR per channel"))
+        right_parts.append(
+            rrb.Tabs(
+                rrb.GraphView(origin="diff/cmg", name="CMG after Algorithm 1"),
+                rrb.GraphView(origin="diff/cmg_removed", name="Removed edges"),
+                rrb.TextLogView(origin="diff/events", name="Change points"),
+                active_tab=0,
+            )
+        )
+    bottom: list[Any] = []
+    if verdict:
+        bottom.append(rrb.TextDocumentView(origin=VERDICT_ENTITY, name="Verdict"))
+    for phase in searches:
+        bottom.append(
+            rrb.TimeSeriesView(
+                origin=f"search/{phase}",
+                contents=[
+                    f"+ search/{phase}/objectives/**",
+                    f"+ search/{phase}/best/**",
+                    f"+ search/{phase}/feasible",
+                ],
+                name=f"{phase.capitalize()} search",
+            )
+        )
+        bottom.append(
+            rrb.TextDocumentView(origin=f"search/{phase}/summary", name=f"{phase.capitalize()} table")
+        )
+    if bottom:
+        right_parts.append(rrb.Tabs(*bottom, active_tab=0) if len(bottom) > 1 else bottom[0])
+    layout = rrb.Horizontal(left, rrb.Vertical(*right_parts), column_shares=[3, 2]) if right_parts else left
+    return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE), collapse_panels=True)
+
+
+def recording_blueprint(name: str, ex: Execution) -> Any:
+    """The layout of ``rocas view RECORDING.mcap``: scene, signals, every channel's fields."""
+    import rerun.blueprint as rrb
+
+    channel_views = [
+        rrb.TimeSeriesView(origin=f"executions/{name}/channels/{c}", name=c)
+        for c in sorted(_channel_entities(ex))
+    ]
+    right = rrb.Tabs(*channel_views, active_tab=0) if channel_views else None
+    left = rrb.Vertical(
+        _scene_view(name, ex),
+        rrb.Tabs(*_signal_views([name], _has_brake(ex)), active_tab=0),
+        row_shares=[3, 2],
+    )
+    layout = rrb.Horizontal(left, right, column_shares=[3, 2]) if right is not None else left
+    return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE), collapse_panels=True)
+
+
+def _channel_entities(ex: Execution) -> list[str]:
+    from rocas.viz.signals import entity_name
+
+    return [entity_name(c.topic) for c in ex.channels.values() if len(c.times_s) and c.names]
+
+
+def _has_brake(ex: Execution) -> bool:
+    return any("brake_probability" in c.names for c in ex.channels.values())
+
+
+def write_recording_rrd(
+    path: str | os.PathLike[str], recording: str | os.PathLike[str], name: str = "accident"
+) -> Execution:
+    """Write the ``.rrd`` of one plain recording (scene, signals, channels) with its layout."""
+    ex = load_execution(recording)
+    with rrd_recording(
+        path, recording_blueprint(name, ex), recording_id=f"rocas-view-{Path(recording).stem}"
+    ) as rec:
+        log_execution(rec, name, ex)
+    return ex
+
+
+def write_analysis_rrd(
+    path: str | os.PathLike[str],
+    *,
+    accident: str | os.PathLike[str] | Execution,
+    reference: str | os.PathLike[str] | Execution | None = None,
+    fixed: str | os.PathLike[str] | Execution | None = None,
+    diff_result: DiffResult | None = None,
+    searches: Mapping[str, Sequence[GenerationStats]] = {},  # noqa: B006 (read only)
+    verdict_md: str | None = None,
+    highlight: str | Iterable[str] | None = None,
+    best_labels: Mapping[str, list[str]] | None = None,
+) -> None:
+    """Write the analysis ``.rrd`` (atomically) with the default blueprint.
+
+    Args:
+        path: the ``.rrd`` to write.
+        accident, reference, fixed: recordings (paths) or loaded executions; reference and
+            fixed are optional.
+        diff_result: the differential analysis of accident vs reference.
+        searches: phase name (``physical``, ``cyber``) -> per-generation statistics.
+        verdict_md: the report as markdown.
+        highlight: scenario entity id(s) mutated in the reference execution (drawn highlighted
+            there, and outlined in the accident for comparison).
+        best_labels: phase -> best candidate so far, one label per generation.
+    """
+    from rocas.viz.diff import log_diff
+    from rocas.viz.search import log_search
+
+    ids = [highlight] if isinstance(highlight, str) else list(highlight or ())
+    runs = [
+        (n, e)
+        for n, e in (("accident", accident), ("reference", reference), ("fixed", fixed))
+        if e is not None
+    ]
+    executions = [(n, e if isinstance(e, Execution) else load_execution(e)) for n, e in runs]
+    bp = analysis_blueprint(
+        [n for n, _ in executions],
+        diff=diff_result is not None,
+        searches=[p for p, g in searches.items() if g],
+        verdict=verdict_md is not None,
+        brake=any(_has_brake(e) for _, e in executions),
+        focus=executions[0][1],
+    )
+    with rrd_recording(path, bp, recording_id="rocas-analysis") as rec:
+        for name, ex in executions:
+            log_execution(rec, name, ex, highlight=ids if name in ("accident", "reference") else ())
+        if diff_result is not None:
+            log_diff(rec, diff_result, "diff", timelines=("time", TIMELINE))
+        for phase, gens in searches.items():
+            if gens:
+                log_search(rec, phase, list(gens), (best_labels or {}).get(phase))
+        if verdict_md is not None:
+            log_verdict(rec, verdict_md)
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path}: unreadable JSON ({exc})") from None
+
+
+def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
+    """What a ``rocas analyze`` run directory holds, read into Python objects.
+
+    Keys (only for the files that exist): ``accident``, ``reference``, ``fixed`` (paths),
+    ``diff`` (the diff JSON), ``searches`` (phase -> generations), ``verdict_md``,
+    ``report`` (report.json), ``highlight`` (mutated entity ids from physical.json).
+    """
+    from rocas.viz.search import generations_from_json
+
+    d = Path(run_dir)
+    if not d.is_dir():
+        raise InputError(f"{d}: not a directory")
+    out: dict[str, Any] = {"searches": {}}
+    for name in EXECUTIONS:
+        if (d / f"{name}.mcap").is_file():
+            out[name] = d / f"{name}.mcap"
+    if (d / "diff.json").is_file():
+        out["diff"] = _read_json(d / "diff.json")
+    for phase in ("physical", "cyber"):
+        if (d / f"{phase}.json").is_file():
+            data = _read_json(d / f"{phase}.json")
+            out["searches"][phase] = generations_from_json(data.get("generations", []))
+            trig = data.get("triggering_entity") or {}
+            if phase == "physical" and trig:
+                out["highlight"] = [e for e in (trig.get("entities") or [trig.get("entity")]) if e]
+    if (d / "report.md").is_file():
+        out["verdict_md"] = (d / "report.md").read_text()
+    if (d / "report.json").is_file():
+        out["report"] = _read_json(d / "report.json")
+    if "accident" not in out:
+        raise InputError(f"{d}: no accident.mcap", hint="is this a directory written by rocas analyze?")
+    return out
+
+
+def _diff_for(contents: dict[str, Any]) -> DiffResult | None:
+    """Recompute the diff (its series are not in diff.json) with the run's settings."""
+    from rocas.analysis.diff import diff
+
+    if "reference" not in contents:
+        return None
+    d = contents.get("diff") or {}
+    kw: dict[str, Any] = {}
+    if d.get("delta_s") is not None:
+        kw["delta_s"] = float(d["delta_s"])
+    if d.get("bin_s") is not None:
+        kw["bin_s"] = float(d["bin_s"])
+    if d.get("control_channel"):
+        kw["control_channel_topic"] = d["control_channel"]
+    a, r = (x.path if isinstance(x, Execution) else x for x in (contents["accident"], contents["reference"]))
+    return diff(a, r, **kw)
+
+
+def log_run_dir(rec: Any, run_dir: str | os.PathLike[str]) -> dict[str, Any]:
+    """Log whatever a run directory holds into an open recording stream; returns its contents."""
+    c = run_dir_contents(run_dir)
+    _log_contents(rec, c)
+    return c
+
+
+def _log_contents(rec: Any, c: dict[str, Any]) -> None:
+    from rocas.viz.diff import log_diff
+    from rocas.viz.search import log_search
+
+    ids = c.get("highlight", [])
+    for name in EXECUTIONS:
+        if name in c:
+            c[name] = log_execution(
+                rec, name, c[name], highlight=ids if name in ("accident", "reference") else ()
+            )
+    result = _diff_for(c)
+    if result is not None:
+        log_diff(rec, result, "diff", timelines=("time", TIMELINE))
+    elif c.get("diff"):
+        _log_diff_json(rec, c["diff"])
+    for phase, gens in c["searches"].items():
+        log_search(rec, phase, gens)
+    if "verdict_md" in c:
+        log_verdict(rec, c["verdict_md"])
+
+
+def _log_diff_json(rec: Any, data: dict[str, Any]) -> None:
+    """The diff JSON alone (no reference recording to recompute it): change points and verdict."""
+    import rerun as rr
+
+    events = sorted(
+        (t, ch["topic"]) for ch in data.get("channels", []) for t in ch.get("change_points_s", [])
+    )
+    if events:
+        rec.send_columns(
+            "diff/events",
+            indexes=[rr.TimeColumn(TIMELINE, duration=[e[0] for e in events])],
+            columns=rr.TextLog.columns(text=[f"{tp}: MDR change point at {t:.2f} s" for t, tp in events]),
+        )
+    module = data.get("deviating_module")
+    text = (
+        f"# Differential analysis\n\n**Initial deviating module: `{module}`**\n\nWalk: "
+        + " → ".join(f"`{n}`" for n in data.get("path", []))
+        + "\n"
+        if module
+        else "# Differential analysis\n\n**No deviating module found.**\n"
+    )
+    rec.log("diff/report", rr.TextDocument(text, media_type="text/markdown"), static=True)
+
+
+def write_run_dir_rrd(path: str | os.PathLike[str], run_dir: str | os.PathLike[str]) -> dict[str, Any]:
+    """Write the ``.rrd`` of a run directory with the default blueprint; returns its contents."""
+    c = run_dir_contents(run_dir)
+    names = [n for n in EXECUTIONS if n in c]
+    for n in names:
+        c[n] = load_execution(c[n])
+    bp = analysis_blueprint(
+        names,
+        diff="reference" in c or "diff" in c,
+        searches=[p for p, g in c["searches"].items() if g],
+        verdict="verdict_md" in c,
+        brake=any(_has_brake(c[n]) for n in names),
+        focus=c["accident"],
+    )
+    with rrd_recording(path, bp, recording_id="rocas-analysis") as rec:
+        _log_contents(rec, c)
+    return c
+
+
+__all__ = [
+    "analysis_blueprint",
+    "log_execution",
+    "log_run_dir",
+    "log_verdict",
+    "recording_blueprint",
+    "run_dir_contents",
+    "write_analysis_rrd",
+    "write_recording_rrd",
+    "write_run_dir_rrd",
+]
