@@ -101,12 +101,16 @@ class AnalyzeConfig:
         if self.validation_variants < 0:
             raise UsageError("--validation must be zero or positive")
 
-    def search(self, stage: int) -> SearchConfig:
+    def search(self, stage: int, n_vars: int = 0) -> SearchConfig:
+        """Stage 1: physical (single-property seeds). Stage 2: cyber (screening first, which
+        costs two simulations per parameter out of the budget)."""
+        screen = stage == 2
+        left = self.budget - (2 * n_vars if screen else 0)
         return SearchConfig(population=self.population,
-                            generations=max(1, self.budget // self.population),
+                            generations=max(1, left // self.population),
                             seed=self.seed * 1000 + stage,
                             single_property_share=1.0 if stage == 1 else 0.5,
-                            mutate_prob=0.3)
+                            mutate_prob=0.3, screen=screen)
 
 
 @dataclass(frozen=True)
@@ -259,7 +263,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
 
     res = run_search(space, batch, run.cfg.search(1), 3, checkpoint=run.out / "physical.ckpt",
                      on_generation=lambda s: run.progress("physical", _gen_info(s)))
-    chosen = _choose_trigger(res)
+    chosen = _choose_trigger(res, space)
     result: dict[str, Any] = {"generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "front": [_cand_json(c) for c in res.front[:20]]}
@@ -283,16 +287,21 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
 F2_TOLERANCE_M2 = 1.0
 
 
-def _choose_trigger(res: SearchResult) -> Candidate | None:
-    """From the feasible Pareto front: the executions most similar to the original (f2 within
-    F2_TOLERANCE_M2 of the best), then the fewest/smallest changes (f3), then the most
-    suspicious entity (f1)."""
+def _choose_trigger(res: SearchResult, space: MutationSpace) -> Candidate | None:
+    """The documented rule, over the feasible Pareto front:
+
+    1. keep the executions most similar to the original (f2 within F2_TOLERANCE_M2 of the
+       best): a good reference differs from the accident only where it must;
+    2. then the fewest mutated entities (the triggering entity, not a coalition);
+    3. then the most suspicious (f1: close to and in front of the ego);
+    4. then the smallest change (f3), and the names, for determinism.
+    """
     if not res.front:
         return None
     best_f2 = min(c.objectives[1] for c in res.front)
     similar = [c for c in res.front if c.objectives[1] <= best_f2 + F2_TOLERANCE_M2]
-    return min(similar, key=lambda c: (c.objectives[2], c.objectives[0], c.objectives[1],
-                                       c.mutation.names))
+    return min(similar, key=lambda c: (len(mutated_entities(space, c.mutation)), c.objectives[0],
+                                       c.objectives[2], c.objectives[1], c.mutation.names))
 
 
 # -- phase III: differential analysis --------------------------------------------------------
@@ -336,7 +345,8 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         return [((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), space.distance(m)),
                  violation(r.outcome)) for m, r in zip(ms, run_fixes(ms), strict=True)]
 
-    res = run_search(space, batch, run.cfg.search(2), 2, checkpoint=run.out / "cyber.ckpt",
+    res = run_search(space, batch, run.cfg.search(2, len(space.variables)), 2,
+                     checkpoint=run.out / "cyber.ckpt",
                      on_generation=lambda s: run.progress("cyber", _gen_info(s)))
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
                               "generations": [_gen_json(g) for g in res.generations],
