@@ -1,0 +1,59 @@
+import sys
+
+import pytest
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "viz"))
+from rrd import read_rrd  # noqa: E402
+
+from rocas.cli.view import has_display  # noqa: E402
+from rocas.scenarios.loader import load_example  # noqa: E402
+from rocas.sim.engine import simulate  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    import dataclasses
+
+    path = tmp_path_factory.mktemp("view") / "rt.mcap"
+    simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=8.0), output=path)
+    return path
+
+
+def test_view_writes_the_rrd_of_a_recording(rocas, recording, tmp_path):
+    out = tmp_path / "v.rrd"
+    res = rocas("view", recording, "--rrd", out, "--no-viewer")
+    assert res.code == 0, res.stderr
+    assert "Rerun recording" in res.stdout and "pose from /localization/pose" in res.stdout
+    e, blueprints = read_rrd(out)
+    assert blueprints == 1 and e["/executions/accident/ego/box"].rows > 0
+    assert "/executions/accident/channels/canbus.chassis" in e
+
+
+def test_view_of_a_run_dir(rocas, recording, tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "accident.mcap").write_bytes(recording.read_bytes())
+    (run / "report.md").write_text("# verdict\n")
+    out = tmp_path / "run.rrd"
+    res = rocas("view", run, "--rrd", out, "--no-viewer")
+    assert res.code == 0, res.stderr
+    assert "executions: accident" in res.stdout and "verdict" in res.stdout
+    e, _ = read_rrd(out)
+    assert e["/verdict"].static_rows == 1
+
+
+def test_view_errors(rocas, tmp_path):
+    res = rocas("view", tmp_path / "missing.mcap", "--no-viewer", "--rrd", tmp_path / "x.rrd")
+    assert res.code != 0 and "no such file" in res.stderr
+    res = rocas("view", tmp_path, "--no-viewer", "--rrd", tmp_path / "x.rrd")
+    assert res.code != 0 and "no accident.mcap" in res.stderr
+    res = rocas("view", tmp_path, "--no-viewer")
+    assert res.code != 0 and "--rrd" in res.stderr
+    assert not (tmp_path / "x.rrd").exists()
+
+
+def test_has_display():
+    if sys.platform in ("darwin", "win32"):
+        pytest.skip("always a display")
+    assert not has_display({})
+    assert has_display({"DISPLAY": ":0"}) and has_display({"WAYLAND_DISPLAY": "wayland-0"})
