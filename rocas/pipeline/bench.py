@@ -1,0 +1,147 @@
+"""``rocas bench``: `rocas analyze` over the accident catalog, scored against its ground truth.
+
+Prints the paper's Table 4 for our ADS (a hit/miss mark per column), the time breakdown per
+phase, the search-space reduction (parameters searched against all, as in Table 2) and the
+comparison of ``--scope module`` with ``--scope all`` (the paper's brute-force baseline):
+simulations and time to the first fix.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from rocas.errors import UsageError
+from rocas.pipeline.analyze import AnalyzeConfig, analyze
+
+
+def _expected(truth: Any) -> dict[str, Any]:
+    return {"verdict": "misconfiguration" if truth.fixable else "no_configuration_fix",
+            "deviating_module": truth.module, "parameters": list(truth.parameters),
+            "trigger_entity": truth.trigger_entity, "trigger_property": truth.trigger_property}
+
+
+def _found(report: dict[str, Any]) -> dict[str, Any]:
+    trig = report.get("triggering_entity") or {}
+    props = [p["name"].rsplit(".", 1)[-1] for p in trig.get("properties", [])]
+    return {"verdict": report["verdict"], "deviating_module": report["deviating_module"],
+            "parameters": [m["parameter"] for m in report["misconfiguration"]],
+            "trigger_entity": trig.get("entity"), "trigger_property": props[0] if props else None}
+
+
+def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool]:
+    """Hit marks per column: verdict, module, parameter (any documented parameter found),
+    and the overall hit (verdict and module, and parameter when a fix exists)."""
+    verdict = expected["verdict"] == found["verdict"]
+    module = expected["deviating_module"] == found["deviating_module"]
+    param = bool(set(expected["parameters"]) & set(found["parameters"])) \
+        if expected["verdict"] == "misconfiguration" else not found["parameters"]
+    return {"verdict": verdict, "module": module, "parameter": param,
+            "hit": verdict and module and param}
+
+
+def recording_for(key: str, directory: Path) -> Path | None:
+    hits = sorted(directory.glob(f"{key.split('_', 1)[0]}*.mcap"))
+    return hits[0] if hits else None
+
+
+def run_bench(
+    ids: Sequence[str] | None,
+    out: Path,
+    cfg: AnalyzeConfig,
+    *,
+    recordings: Path = Path("recordings"),
+    compare_scope: int = 3,
+    instances: int = 0,
+    progress: Callable[[str], None] = lambda _: None,
+) -> dict[str, Any]:
+    """Analyze catalog entries and score them; returns the ``--json`` object."""
+    from rocas.scenarios.catalog import entries, entry, generate_instances
+
+    chosen = [entry(i) for i in ids] if ids else list(entries())
+    if not chosen:
+        raise UsageError("the catalog is empty")
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[dict[str, Any]] = []
+    reports: dict[str, dict[str, Any]] = {}
+    for e in chosen:
+        rec = recording_for(e.key, recordings)
+        source: Any = rec if rec is not None else e.scenario
+        progress(f"{e.id}: analyze {rec or e.key + ' (simulated)'}")
+        t0 = time.perf_counter()
+        report = analyze(source, out / e.key, cfg, resume=(out / e.key / "state.json").exists())
+        seconds = time.perf_counter() - t0
+        reports[e.key] = report
+        exp, fnd = _expected(e.truth), _found(report)
+        marks = score(exp, fnd)
+        rows.append({"id": e.key.split("_", 1)[0], "type": e.id, "title": e.truth.title,
+                     "expected": exp, "found": fnd, "marks": marks, "hit": marks["hit"],
+                     "seconds": round(seconds, 2), "timings_s": report["timings_s"],
+                     "evaluations": report["evaluations"], "search_space": report["search_space"],
+                     "first_fix_evaluation": report.get("first_fix_evaluation")})
+
+    totals: dict[str, float] = {}
+    for r in rows:
+        for k, v in r["timings_s"].items():
+            totals[k] = totals.get(k, 0.0) + v
+    whole = sum(totals.values()) or 1.0
+    reductions = [r["search_space"]["reduction"] for r in rows if r["search_space"]["reduction"] is not None]
+
+    comparison = []
+    fixable = [r for r in rows if r["expected"]["verdict"] == "misconfiguration"
+               and r["found"]["deviating_module"]][:compare_scope]
+    for r in fixable:
+        e = next(x for x in chosen if x.key.startswith(r["id"]))
+        rec = recording_for(e.key, recordings)
+        progress(f"{e.id}: --scope all")
+        t0 = time.perf_counter()
+        all_cfg = replace(cfg, scope="all")
+        rep = analyze(rec if rec is not None else e.scenario, out / f"{e.key}.all", all_cfg,
+                      resume=(out / f"{e.key}.all" / "state.json").exists())
+        comparison.append({
+            "id": r["id"],
+            "module": {"first_fix_evaluation": r["first_fix_evaluation"],
+                       "cyber_evaluations": r["evaluations"].get("cyber"),
+                       "cyber_seconds": r["timings_s"].get("cyber"),
+                       "parameters": r["search_space"]["parameters_searched"]},
+            "all": {"first_fix_evaluation": rep.get("first_fix_evaluation"),
+                    "cyber_evaluations": rep["evaluations"].get("cyber"),
+                    "cyber_seconds": rep["timings_s"].get("cyber"),
+                    "parameters": rep["search_space"]["parameters_searched"],
+                    "found": [m["parameter"] for m in rep["misconfiguration"]],
+                    "seconds": round(time.perf_counter() - t0, 2)},
+        })
+
+    per_type = []
+    if instances:
+        for e in chosen:
+            inst = generate_instances(e, instances, seed=cfg.seed)
+            hits = 0
+            for k, (seed, scenario) in enumerate(inst.instances):
+                progress(f"{e.id}: instance {k + 1}/{len(inst.instances)}")
+                rep = analyze(scenario, out / "instances" / f"{e.key}_{seed}", cfg,
+                              resume=(out / "instances" / f"{e.key}_{seed}" / "state.json").exists())
+                hits += score(_expected(e.truth), _found(rep))["hit"]
+            per_type.append({"type": e.id, "tried": inst.tried, "crashed": inst.crashed,
+                             "analyzed": len(inst.instances), "hits": hits,
+                             "accuracy": hits / len(inst.instances) if inst.instances else None})
+
+    return {
+        "entries": rows,
+        "hits": sum(r["hit"] for r in rows),
+        "total": len(rows),
+        "time_breakdown": {k: round(v / whole, 4) for k, v in totals.items()},
+        "time_total_s": round(whole, 2),
+        "search_space_reduction_mean": sum(reductions) / len(reductions) if reductions else None,
+        "scope_comparison": comparison,
+        "instances": per_type,
+    }
+
+
+def default_out() -> Path:
+    return Path(tempfile.gettempdir()) / f"rocas-bench-{os.getpid()}"
