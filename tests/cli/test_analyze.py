@@ -1,0 +1,41 @@
+import json
+
+from rocas.pipeline.bench import score
+
+
+def test_analyze_json_report_and_resume(rocas, tmp_path):
+    out = tmp_path / "run"
+    args = ["analyze", "roundabout_red_truck", "--scenario", "--out", out, "--budget", "16",
+            "--population", "8", "--validation", "4", "--workers", "1", "--json"]
+    res = rocas(*args)
+    assert res.code == 0, res.stderr
+    report = json.loads(res.stdout)
+    for key in ("verdict", "accident", "triggering_entity", "deviating_module", "misconfiguration",
+                "validation", "evaluations", "timings_s"):
+        assert key in report
+    assert report["accident"]["kind"] == "emergency"
+    again = rocas(*args)
+    assert again.code == 2 and "--resume" in again.stderr and "Traceback" not in again.stderr
+    resumed = rocas(*args, "--resume")
+    assert resumed.code == 0
+    assert {k: v for k, v in json.loads(resumed.stdout).items() if k != "timings_s"} == \
+        {k: v for k, v in report.items() if k != "timings_s"}
+
+
+def test_analyze_bad_input(rocas, tmp_path):
+    res = rocas("analyze", tmp_path / "nope.mcap", "--out", tmp_path / "r")
+    assert res.code == 3 and "no such file" in res.stderr
+    res = rocas("analyze", "roundabout_red_truck", "--scenario", "--budget", "2", "--out", tmp_path / "r")
+    assert res.code == 2 and "--budget" in res.stderr
+
+
+def test_bench_scoring():
+    exp = {"verdict": "misconfiguration", "deviating_module": "perception",
+           "parameters": ["perception.brake_threshold"]}
+    hit = {"verdict": "misconfiguration", "deviating_module": "perception",
+           "parameters": ["perception.brake_threshold"]}
+    assert score(exp, hit)["hit"]
+    assert not score(exp, {**hit, "parameters": ["perception.fov_deg"]})["hit"]
+    assert not score(exp, {**hit, "deviating_module": "planning"})["hit"]
+    no_fix = {"verdict": "no_configuration_fix", "deviating_module": "perception", "parameters": []}
+    assert score(no_fix, {**no_fix})["hit"]
