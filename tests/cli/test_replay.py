@@ -1,0 +1,55 @@
+import dataclasses
+import json
+
+import pytest
+
+from rocas.scenarios import load_example
+from rocas.sim.engine import simulate
+
+
+@pytest.fixture(scope="module")
+def roundabout(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cli_replay") / "roundabout.mcap"
+    simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0), output=path)
+    return path
+
+
+def test_replay_json(rocas, roundabout, tmp_path):
+    out = tmp_path / "replay.mcap"
+    r = rocas("replay", roundabout, "-o", out, "--json")
+    assert r.code == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["reproduced"] is True
+    assert d["accident"]["kind"] == "emergency" and d["original_accident"]["kind"] == "emergency"
+    assert abs(d["accident"]["time_s"] - d["original_accident"]["time_s"]) <= 0.5
+    assert d["ego_rmse_m"] < 0.2 and d["ego_max_error_m"] >= d["ego_rmse_m"]
+    assert "outcome" in d and out.exists()
+
+
+def test_replay_text_and_what_if(rocas, roundabout):
+    r = rocas("replay", roundabout)
+    assert r.code == 0 and "reproduced" in r.stdout and "RMSE" in r.stdout
+    r = rocas("replay", roundabout, "--set", "perception.brake_threshold=0.99", "--json")
+    assert r.code == 0, r.stderr          # a what-if that avoids the accident is not a failure
+    d = json.loads(r.stdout)
+    assert d["reproduced"] is False and d["accident"] is None
+    assert d["params"] == {"perception.brake_threshold": 0.99}
+
+
+def test_replay_errors(rocas, tmp_path, roundabout):
+    r = rocas("replay", tmp_path / "missing.mcap")
+    assert r.code == 3 and "no such file" in r.stderr
+    r = rocas("replay", roundabout, "--set", "perception.nope=1")
+    assert r.code == 3 and "perception.nope" in r.stderr
+    r = rocas("replay", roundabout, "-o", tmp_path / "x.txt")
+    assert r.code == 2
+
+
+def test_not_reproduced_exits_4_after_the_report(rocas, roundabout, monkeypatch):
+    import rocas.replay.run as run_mod
+
+    monkeypatch.setattr(run_mod, "same_accident", lambda a, b: False)
+    r = rocas("replay", roundabout, "--json")
+    assert r.code == 4
+    assert json.loads(r.stdout)["reproduced"] is False      # the report is still printed
+    assert "did not reproduce" in r.stderr

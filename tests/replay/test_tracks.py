@@ -1,0 +1,65 @@
+"""Track assembly on synthetic detections with known answers."""
+
+import numpy as np
+
+from rocas.replay.source import Detections
+from rocas.replay.tracks import build_tracks, smooth
+
+
+def _detections(rows: list[tuple], colors: list[str]) -> Detections:
+    a = np.asarray(rows, dtype=float)
+    return Detections(times=a[:, 0], track_id=a[:, 1].astype(int), xy=a[:, 2:4], heading=a[:, 4],
+                      velocity=a[:, 5:7], size=a[:, 7:10], type=a[:, 10].astype(int),
+                      sub_type=a[:, 11].astype(int), color=tuple(colors))
+
+
+def _car(t: np.ndarray, tid: int, x0: float, v: float, noise: float = 0.0, seed: int = 0,
+         sub_type: int = 3, color: str = "red") -> tuple[list[tuple], list[str]]:
+    rng = np.random.default_rng(seed)
+    rows = [(ti, tid, x0 + v * ti + noise * rng.normal(), 2.0 + noise * rng.normal(), 0.0, v, 0.0,
+             8.5, 2.5, 3.3, 5, sub_type) for ti in t]
+    return rows, [color] * len(rows)
+
+
+def test_id_switch_and_gap_are_stitched_and_bridged():
+    t1 = np.round(np.arange(0.0, 3.0, 0.1), 6)
+    t2 = np.round(np.arange(4.0, 8.0, 0.1), 6)   # 1 s occlusion, new id after it
+    r1, c1 = _car(t1, 4, 0.0, 10.0)
+    r2, c2 = _car(t2, 9, 0.0, 10.0)
+    tracks = build_tracks(_detections(r1 + r2, c1 + c2), 0.1)
+    assert len(tracks) == 1
+    tr = tracks[0]
+    assert tr.track_ids == (4, 9) and tr.name == "obstacle_4"
+    assert (tr.kind, tr.model, tr.color) == ("vehicle", "truck", "red")
+    gap = (tr.times > 3.0) & (tr.times < 4.0)
+    assert not tr.observed[gap].any()
+    assert np.allclose(tr.xy[gap, 0], 10.0 * tr.times[gap], atol=0.05)  # bridged on the line
+    assert np.allclose(tr.speed[5:-5], 10.0, atol=0.05)
+
+
+def test_different_obstacles_are_not_stitched():
+    t = np.round(np.arange(0.0, 2.0, 0.1), 6)
+    a, ca = _car(t, 1, 0.0, 10.0)
+    b, cb = _car(t + 2.5, 2, 200.0, 10.0, sub_type=6, color="blue")   # elsewhere, a pedestrian
+    tracks = build_tracks(_detections(a + b, ca + cb), 0.1)
+    assert [tr.track_ids for tr in tracks] == [(1,), (2,)]
+    assert tracks[1].kind == "pedestrian" and tracks[1].color == "blue"
+
+
+def test_parked_obstacle_sits_at_the_median_and_unknowns_are_noted():
+    t = np.round(np.arange(0.0, 5.0, 0.1), 6)
+    rows, colors = _car(t, 3, 50.0, 0.0, noise=0.15, seed=1, sub_type=0, color="unknown")
+    tracks = build_tracks(_detections(rows, colors), 0.1)
+    tr = tracks[0]
+    assert tr.stationary and np.allclose(tr.speed, 0.0)
+    assert np.allclose(tr.xy[0], [50.0, 2.0], atol=0.1)
+    assert tr.model == "truck" and tr.color == "white"           # from the size; default colour
+    assert any("colour" in n for n in tr.notes) and any("size" in n for n in tr.notes)
+
+
+def test_smoother_keeps_lines_and_reduces_noise():
+    t = np.arange(0.0, 5.0, 0.1)
+    line = np.stack([3.0 * t, -t], 1)
+    assert np.allclose(smooth(t, line), line)  # local linear: no bias, even at the ends
+    noisy = line + np.random.default_rng(2).normal(0, 0.2, line.shape)
+    assert np.abs(smooth(t, noisy) - line).std() < 0.6 * np.abs(noisy - line).std()
