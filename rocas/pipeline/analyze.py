@@ -506,7 +506,3 @@ def _analyze(run: _Run, scenario: Scenario | None, recording: Path | None) -> di
     _phase_validation(run, cyber["fix"])
     return write_report(run.out, build_report(run.state, run.accident, "misconfiguration"))
 
-
-def search_space_of(module: str | None) -> MutationSpace:
-    """The parameter space a cyber search with this module would explore (for reports)."""
-    return cyber_space(module, {})

@@ -323,14 +323,8 @@ def trajectory_rmse(a: np.ndarray, b: np.ndarray, times: np.ndarray, until_s: fl
     return math.sqrt(float(np.mean(np.sum(d * d, axis=1))))
 
 
-def outcome_record(outcome: Any) -> dict[str, Any]:
-    """The fields of an outcome that the catalog compares."""
-    return {"collided": outcome.collided, "collision_with": outcome.collision_with,
-            "emergency": outcome.emergency}
-
-
 __all__ = ["CatalogEntry", "GroundTruth", "InstanceReport", "accident_matches", "accident_time",
-           "entries", "entry", "generate_instances", "mutate", "outcome_record",
+           "entries", "entry", "generate_instances", "mutate",
            "scenario_toml", "trajectory_rmse"]
 
 
