@@ -1,3 +1,4 @@
+import dataclasses
 import io
 from dataclasses import dataclass
 
@@ -24,3 +25,14 @@ def rocas():
         return Result(code, out.getvalue(), err.getvalue())
 
     return run
+
+
+@pytest.fixture(scope="session")
+def red_truck_recording(tmp_path_factory):
+    """A 9 s recording of the roundabout red-truck example (hard brake at ~6.8 s)."""
+    from rocas.scenarios import load_example
+    from rocas.sim.engine import simulate
+
+    path = tmp_path_factory.mktemp("red_truck") / "roundabout.mcap"
+    simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0), output=path)
+    return path

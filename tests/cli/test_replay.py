@@ -1,17 +1,11 @@
-import dataclasses
 import json
 
 import pytest
 
-from rocas.scenarios import load_example
-from rocas.sim.engine import simulate
-
 
 @pytest.fixture(scope="module")
-def roundabout(tmp_path_factory):
-    path = tmp_path_factory.mktemp("cli_replay") / "roundabout.mcap"
-    simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0), output=path)
-    return path
+def roundabout(red_truck_recording):
+    return red_truck_recording
 
 
 def test_replay_json(rocas, roundabout, tmp_path):

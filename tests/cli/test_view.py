@@ -1,22 +1,14 @@
 import sys
 
 import pytest
+from rrd import read_rrd
 
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "viz"))
-from rrd import read_rrd  # noqa: E402
-
-from rocas.cli.view import has_display  # noqa: E402
-from rocas.scenarios.loader import load_example  # noqa: E402
-from rocas.sim.engine import simulate  # noqa: E402
+from rocas.cli.view import has_display
 
 
 @pytest.fixture(scope="module")
-def recording(tmp_path_factory):
-    import dataclasses
-
-    path = tmp_path_factory.mktemp("view") / "rt.mcap"
-    simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=8.0), output=path)
-    return path
+def recording(red_truck_recording):
+    return red_truck_recording
 
 
 def test_view_writes_the_rrd_of_a_recording(rocas, recording, tmp_path):
