@@ -99,16 +99,21 @@ class Planning:
         _, s0, d0 = project_on_reference(road, loc.x, loc.y)
         v0 = chassis.speed
         # --- cruise speed -----------------------------------------------------------------
-        ahead = s0[:, None] + np.arange(0.0, 80.0, 2.0)[None, :]
+        # every cap ahead (lane limit, junction, curvature) is previewed with a braking profile at
+        # half the comfortable deceleration, so a lower cap is approached gently instead of being
+        # met by a hard brake where it starts
+        dist = np.arange(0.0, 80.0, 2.0)[None, :]
+        ahead = s0[:, None] + dist
         _, _, _, kap = reference_at(road, ahead)
-        in_prev = (ahead - s0[:, None]) <= c("curve_preview_m")
-        kmax = np.max(np.where(in_prev, np.abs(kap), 0.0), axis=1)
-        v_curve = np.sqrt(p["max_lateral_accel_mps2"] / np.maximum(kmax, 1e-4))
         ii = road.ref_index(ahead)
-        junction_near = np.any(road.ref_junction[ii] & ((ahead - s0[:, None]) < 20.0), axis=1)
-        limit = road.ref_speed_limit[road.ref_index(s0)] * p["speed_limit_factor"]
-        v_cruise = np.minimum.reduce([p["cruise_speed_mps"], limit, v_curve,
-                                      np.where(junction_near, p["junction_speed_mps"], np.inf)])
+        v_curve = np.sqrt(p["max_lateral_accel_mps2"][:, None] / np.maximum(np.abs(kap), 1e-4))
+        v_curve = np.where(dist <= c("curve_preview_m"), v_curve, np.inf)
+        cap = np.minimum.reduce([
+            np.broadcast_to(c("cruise_speed_mps"), ahead.shape),
+            road.ref_speed_limit[ii] * c("speed_limit_factor"), v_curve,
+            np.where(road.ref_junction[ii], c("junction_speed_mps"), np.inf)])
+        b_pre = 0.5 * c("comfort_decel_mps2")
+        v_cruise = np.min(np.sqrt(cap * cap + 2.0 * b_pre * dist), axis=1)
         # --- obstacles relative to the reference ------------------------------------------
         pub = pred.published
         hl_o, hw_o = pred.length / 2, pred.width / 2

@@ -19,6 +19,9 @@ CASES = (
     ("junction_straight", {"prediction.cyclist_cut_in_lateral_m": 5.0}),
     ("left_turn_oncoming", {"control.lateral_controller": 1.0}),
     ("junction_straight", {"perception.glare_sun_altitude_deg": 60.0}),  # sun in the camera
+    # a longer overlap horizon makes the ego yield to the van and then weigh the car
+    ("left_turn_oncoming", {"planning.overlap_check_horizon_s": 8.0}),
+    ("left_turn_oncoming", {"planning.overtake_time_buffer_s": 5.0}),  # waits at a standstill
 )
 
 
