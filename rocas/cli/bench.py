@@ -33,9 +33,14 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation)
-    res = run_bench(args.ids, Path(args.out), cfg, recordings=Path(args.recordings),
-                    compare_scope=args.compare_scope, instances=args.instances,
-                    progress=lambda msg: print(msg, file=env.stderr, flush=True))
+    try:
+        res = run_bench(args.ids, Path(args.out), cfg, recordings=Path(args.recordings),
+                        compare_scope=args.compare_scope, instances=args.instances,
+                        progress=lambda msg: print(msg, file=env.stderr, flush=True))
+    except KeyboardInterrupt as exc:
+        exc.kept = (f"finished analyses and phases are kept in {args.out}; "  # type: ignore[attr-defined]
+                    "the same command resumes them")
+        raise
     if args.json:
         env.stdout.write(json.dumps(res, indent=2) + "\n")
     else:

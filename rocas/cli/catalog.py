@@ -82,9 +82,15 @@ def _record(args: argparse.Namespace, env: Env) -> int:
     out_dir = Path(args.directory)
     out_dir.mkdir(parents=True, exist_ok=True)
     failed = []
+    written: list[str] = []
     for e in _selected(args.only):
         path = out_dir / f"{e.key}.mcap"
-        res = simulate(e.scenario, output=path)
+        try:
+            res = simulate(e.scenario, output=path)
+        except KeyboardInterrupt as exc:
+            exc.kept = _kept(written, out_dir, "recording")  # type: ignore[attr-defined]
+            raise
+        written.append(path.name)
         ok = accident_matches(e.truth, res.outcome)
         if not ok:
             failed.append(e.id)
@@ -102,22 +108,36 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
         raise UsageError("--instances must be >= 1")
     out_dir = Path(args.output) if args.output else None
     rows = []
-    for e in _selected(args.only):
-        rep = generate_instances(e, args.instances, seed=args.seed)
-        rows.append({"id": e.id, "key": e.key, "tried": rep.tried, "crashed": rep.crashed,
-                     "kept": len(rep.instances)})
-        if out_dir is not None:
-            from rocas._fs import atomic_path
+    written: list[str] = []
+    try:
+        for e in _selected(args.only):
+            rep = generate_instances(e, args.instances, seed=args.seed)
+            rows.append({"id": e.id, "key": e.key, "tried": rep.tried, "crashed": rep.crashed,
+                         "kept": len(rep.instances)})
+            if out_dir is not None:
+                from rocas._fs import atomic_path
 
-            for _, sc in rep.instances:
-                with atomic_path(out_dir / f"{sc.name}.toml") as tmp:
-                    tmp.write_text(scenario_toml(sc), encoding="utf-8")
-        if not args.json:
-            print(f"{e.id}: {rep.crashed}/{rep.tried} tried variants crash; kept "
-                  f"{len(rep.instances)}", file=env.stdout)
+                for _, sc in rep.instances:
+                    with atomic_path(out_dir / f"{sc.name}.toml") as tmp:
+                        tmp.write_text(scenario_toml(sc), encoding="utf-8")
+                    written.append(f"{sc.name}.toml")
+            if not args.json:
+                print(f"{e.id}: {rep.crashed}/{rep.tried} tried variants crash; kept "
+                      f"{len(rep.instances)}", file=env.stdout)
+    except KeyboardInterrupt as exc:
+        exc.kept = _kept(written, out_dir, "scenario file")  # type: ignore[attr-defined]
+        raise
     if args.json:
         print(json.dumps(rows, indent=2), file=env.stdout)
     return 0
+
+
+def _kept(written: list[str], where: Path | None, what: str) -> str:
+    """The Ctrl-C line's account of the files that were finished before the interruption."""
+    if not written or where is None:
+        return "no output was written"
+    names = ", ".join(written[:3]) + (", ..." if len(written) > 3 else "")
+    return f"{len(written)} complete {what}{'s' if len(written) != 1 else ''} kept in {where}: {names}"
 
 
 def run(args: argparse.Namespace, env: Env) -> int:

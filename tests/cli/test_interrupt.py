@@ -1,0 +1,111 @@
+"""Ctrl-C in every command that writes: exit 130, one line saying what was kept, and no file
+that looks complete but is not."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from rocas.recording.reader import open_recording
+
+
+def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
+    """Make ``target`` (module.attr path) raise KeyboardInterrupt on call number ``calls + 1``."""
+    mod_name, _, attr = target.rpartition(".")
+    import importlib
+
+    try:
+        owner = importlib.import_module(mod_name)
+    except ModuleNotFoundError:  # a method: module.Class.method
+        mod_name, _, cls = mod_name.rpartition(".")
+        owner = getattr(importlib.import_module(mod_name), cls)
+    original = getattr(owner, attr)
+    seen = {"n": 0}
+
+    def wrapper(*args, **kwargs):
+        seen["n"] += 1
+        if seen["n"] > calls:
+            raise KeyboardInterrupt
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, attr, wrapper)
+
+
+def _only_line(stderr: str) -> str:
+    lines = [ln for ln in stderr.splitlines() if ln.startswith("rocas: error:")]
+    assert len(lines) == 1, stderr
+    assert "Traceback" not in stderr
+    return lines[0]
+
+
+@pytest.fixture
+def example_toml():
+    from importlib import resources
+
+    return str(resources.files("rocas.scenarios") / "examples" / "junction_straight.toml")
+
+
+def test_simulate_interrupted_while_recording_leaves_nothing(rocas, monkeypatch, tmp_path,
+                                                             example_toml):
+    _interrupt_after(monkeypatch, "rocas.recording.writer.RecordingWriter.write", 200)
+    out = tmp_path / "run.mcap"
+    res = rocas("simulate", example_toml, "-o", out, "--no-progress")
+    assert res.code == 130
+    assert _only_line(res.stderr) == "rocas: error: interrupted (no output was written)"
+    assert os.listdir(tmp_path) == []
+
+
+def test_replay_interrupted_while_recording_leaves_nothing(rocas, monkeypatch, tmp_path,
+                                                           red_truck_recording):
+    _interrupt_after(monkeypatch, "rocas.recording.writer.RecordingWriter.write", 100)
+    res = rocas("replay", red_truck_recording, "-o", tmp_path / "replay.mcap")
+    assert res.code == 130
+    assert "no output was written" in _only_line(res.stderr)
+    assert os.listdir(tmp_path) == []
+
+
+def test_annotate_interrupted_while_copying_leaves_nothing(rocas, monkeypatch, tmp_path,
+                                                           red_truck_recording):
+    _interrupt_after(monkeypatch, "mcap.writer.Writer.add_message", 100)
+    res = rocas("annotate", red_truck_recording, "--control-channel", "/control",
+                "-o", tmp_path / "annotated.mcap")
+    assert res.code == 130
+    assert "no output was written" in _only_line(res.stderr)
+    assert os.listdir(tmp_path) == []
+
+
+def test_catalog_record_keeps_the_finished_recordings(rocas, monkeypatch, tmp_path):
+    from rocas.scenarios.catalog import entries
+
+    first, second = entries()[:2]
+    _interrupt_after(monkeypatch, "rocas.sim.engine.simulate", 1)
+    res = rocas("catalog", "record", tmp_path, "--only", first.id, "--only", second.id)
+    assert res.code == 130
+    line = _only_line(res.stderr)
+    assert f"1 complete recording kept in {tmp_path}: {first.key}.mcap" in line
+    assert sorted(os.listdir(tmp_path)) == [f"{first.key}.mcap"]
+    # the kept file is whole: it has its summary and the outcome record
+    rec = open_recording(tmp_path / f"{first.key}.mcap").scan()
+    assert "rocas.run" in dict(rec.metadata)
+
+
+def test_catalog_generate_keeps_the_finished_scenario_files(rocas, monkeypatch, tmp_path):
+    from rocas.scenarios.catalog import entries
+
+    first, second = entries()[:2]
+    _interrupt_after(monkeypatch, "rocas.scenarios.catalog.generate_instances", 1)
+    res = rocas("catalog", "generate", "--instances", "1", "-o", tmp_path,
+                "--only", first.id, "--only", second.id)
+    assert res.code == 130
+    files = os.listdir(tmp_path)
+    assert len(files) == 1 and files[0].endswith(".toml")
+    assert f"1 complete scenario file kept in {tmp_path}: {files[0]}" in _only_line(res.stderr)
+
+
+def test_bench_says_the_run_directories_resume(rocas, monkeypatch, tmp_path):
+    _interrupt_after(monkeypatch, "rocas.pipeline.bench.analyze", 0)
+    res = rocas("bench", "--out", tmp_path / "bench", "A9")
+    assert res.code == 130
+    line = _only_line(res.stderr)
+    assert f"kept in {tmp_path / 'bench'}" in line and "resumes" in line
