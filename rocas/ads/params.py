@@ -407,6 +407,8 @@ def parse_assignment(text: str) -> tuple[str, float]:
         raise ScenarioError(f"--set {text}: expected module.param=value")
     name = name.strip()
     raw = raw.strip().lower()
+    if not name or not raw:
+        raise ScenarioError(f"--set {text}: expected module.param=value")
     value: float
     if raw in ("true", "false"):
         value = float(raw == "true")

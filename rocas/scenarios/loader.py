@@ -9,6 +9,7 @@ format back (used for the world attachment of recordings).
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from collections.abc import Mapping
 from importlib import resources
@@ -36,6 +37,8 @@ from rocas.scenarios.model import (
 )
 
 FORMAT_VERSION = 1
+#: Keys printed as they are in error messages; any other key is quoted.
+_PLAIN_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 class _Ctx:
@@ -54,6 +57,7 @@ def _table(ctx: _Ctx, data: Any, key: str, allowed: set[str], required: set[str]
         raise ctx.fail(key, f"expected a table, got {type(data).__name__}")
     for k in data:
         if k not in allowed:
+            k = k if _PLAIN_KEY.fullmatch(str(k)) else repr(k)
             raise ctx.fail(f"{key}.{k}" if key else k,
                            f"unknown key (allowed: {', '.join(sorted(allowed))})")
     for k in required:
