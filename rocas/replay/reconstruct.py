@@ -140,7 +140,9 @@ def _original_accident(rec: RecordedRun, notes: list[str]) -> tuple[str, float |
             t = run.get("collision_time_s")
             return "collision", float(t) if t else None, run.get("collision_with") or None, summary
         if run.get("emergency") == "true":
-            times = [float(m.group(1)) for r in _TIME_RE.values() if (m := r.search(summary))]
+            times = [float(run[k]) for k in ("hard_brake_time_s", "estop_time_s") if run.get(k)]
+            if "hard_brake_time_s" not in run:  # recorded before the times were kept as fields
+                times = [float(m.group(1)) for r in _TIME_RE.values() if (m := r.search(summary))]
             t = min(times) if times else unexpected_stop_time(rec.ego_times, rec.ego_track)
             return "emergency", t, None, summary
         return "", None, None, summary

@@ -108,7 +108,14 @@ class ScenarioRecorder:
             "collision_with": outcome.collision_with or "",
             "collision_time_s": "" if outcome.collision_time_s is None
             else repr(outcome.collision_time_s),
+            "collision_kind": outcome.collision_kind or "",
+            "collision_position": "" if outcome.collision_position is None
+            else json.dumps([float(v) for v in outcome.collision_position]),
             "emergency": str(outcome.emergency).lower(),
+            "hard_brake_time_s": _opt(outcome.hard_brake_time_s),
+            "estop_time_s": _opt(outcome.estop_time_s),
+            "unexpected_stop": str(outcome.unexpected_stop).lower(),
+            "max_decel_mps2": repr(outcome.max_decel_mps2),
             "min_separation_m": repr(outcome.min_separation_m),
             "route_completion": repr(outcome.route_completion),
         })
@@ -308,6 +315,11 @@ class ScenarioRecorder:
         msg.lane_id = self._lane_ids[lane] if lane >= 0 else ""
         msg.cruise_speed = float(plan.cruise_speed[0])
         self._write(TOPIC_PLANNING, msg, t_ns)
+
+
+def _opt(v: float | None) -> str:
+    """A metadata value for an optional time: "" when absent."""
+    return "" if v is None else repr(float(v))
 
 
 __all__ = ["ScenarioRecorder", "CANBUS", "CONTROL"]
