@@ -25,7 +25,7 @@ import json
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -267,7 +267,24 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
     result: dict[str, Any] = {"generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "front": [_cand_json(c) for c in res.front[:20]]}
+    evaluations = res.evaluations
     if chosen is not None:
+        # drop properties the avoidance does not need (a search often carries passengers,
+        # e.g. a 0.0001 m move of a bystander), keeping the reference as similar as chosen
+        f2_limit = chosen.objectives[1] + F2_TOLERANCE_M2
+
+        def holds(ms: list[Mutation]) -> list[bool]:
+            scored = batch(ms)
+            return [c <= 0.0 and obj[1] <= f2_limit for obj, c in scored]
+
+        small, n_shrink = shrink_set(chosen.mutation, holds)
+        evaluations += n_shrink
+        result["shrink_evaluations"] = n_shrink
+        result["search_chosen"] = _cand_json(chosen)
+        if small != chosen.mutation:
+            (objs, cons), = batch([small])
+            chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
+            evaluations += 1
         entity = mutated_entities(space, chosen.mutation)
         result["chosen"] = _cand_json(chosen)
         result["triggering_entity"] = {
@@ -278,7 +295,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
         }
         simulate(apply_physical(scn, chosen.mutation), output=run.out / "reference.mcap")
     write_text_atomic(run.out / "physical.json", json.dumps(result, indent=1, default=_jsonable))
-    run.finish("physical", result, time.perf_counter() - t0, res.evaluations)
+    run.finish("physical", result, time.perf_counter() - t0, evaluations)
     (run.out / "physical.ckpt").unlink(missing_ok=True)
     return result
 
