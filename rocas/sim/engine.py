@@ -77,21 +77,22 @@ def resolve_params(scenario: Scenario, params: ParamsLike) -> ParamSet:
     return ParamSet(merged, source=f"scenario {scenario.name}")
 
 
-def initial_ego(world: BatchWorld, scenario: Scenario) -> VehicleState:
-    n = world.batch_size
-    s = np.full(n, scenario.ego.start_s_m)
+def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleState:
+    """The ego's start state per variant (start lateral offset and speed may differ)."""
+    s = np.array([sc.ego.start_s_m for sc in scenarios])
     x, y, h, _ = reference_at(world.road, s)
-    d = scenario.ego.start_lateral_m
+    d = np.array([sc.ego.start_lateral_m for sc in scenarios])
     return VehicleState(x - d * np.sin(h), y + d * np.cos(h), h, h.copy(),
-                        np.full(n, scenario.ego.start_speed_mps))
+                        np.array([sc.ego.start_speed_mps for sc in scenarios], dtype=float))
 
 
-def _run(world: BatchWorld, scenario: Scenario, param_sets: Sequence[ParamSet], *,
+def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[ParamSet], *,
          publish: Publisher | None = None, track_outputs: bool = False,
          on_tick: Callable[[int], None] | None = None) -> BatchResult:
     n = world.batch_size
+    scenario = scenarios[0]  # the structure (route, start arc length) all variants share
     stack = AdsStack(world, stack_params(param_sets))
-    ego = initial_ego(world, scenario)
+    ego = initial_ego(world, scenarios)
     actors = initial_actors(world)
     friction = road_friction(world.weather[:, 1])
     oracles = Oracles(world, np.full(n, scenario.ego.start_s_m))
@@ -174,7 +175,7 @@ def simulate_batch(
     seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
     world = compile_batch(scenarios, seeds)
     sets = [resolve_params(s, p) for s, p in zip(scenarios, params, strict=True)]
-    return _run(world, scenarios[0], sets, track_outputs=track_outputs)
+    return _run(world, scenarios, sets, track_outputs=track_outputs)
 
 
 def simulate(
@@ -191,13 +192,13 @@ def simulate(
     world = compile_batch([scenario], [seed])
     pset = resolve_params(scenario, params)
     if output is None:
-        res = _run(world, scenario, [pset], on_tick=on_tick)
+        res = _run(world, [scenario], [pset], on_tick=on_tick)
         path, count = None, 0
     else:
         from rocas.sim.recorder import ScenarioRecorder
 
         with ScenarioRecorder(output, scenario, pset, seed) as rec:
-            res = _run(world, scenario, [pset], publish=rec.publish, on_tick=on_tick)
+            res = _run(world, [scenario], [pset], publish=rec.publish, on_tick=on_tick)
             rec.finish(res.outcomes[0])
         path, count = str(output), rec.count
     return RunResult(outcome=res.outcomes[0], times=res.times, ego=res.ego[0],

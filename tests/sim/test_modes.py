@@ -85,3 +85,15 @@ def test_recording_is_atomic_on_failure(tmp_path, short):
     with pytest.raises(Exception):  # noqa: B017 - any failure must leave no file behind
         simulate(bad, output=tmp_path / "x.mcap")
     assert not (tmp_path / "x.mcap").exists()
+
+
+def test_each_variant_starts_with_its_own_ego_speed_and_offset(short, recorded):
+    """The ego's start speed and lateral offset are per variant, not variant 0's."""
+    run, _ = recorded
+    slow = dataclasses.replace(short, ego=dataclasses.replace(short.ego, start_speed_mps=3.0,
+                                                              start_lateral_m=0.4))
+    batch = simulate_batch([slow, short])
+    alone = simulate_batch([slow])
+    assert batch.ego[0, 0, 3] == 3.0 and batch.ego[1, 0, 3] == short.ego.start_speed_mps
+    assert np.array_equal(batch.ego[1], run.ego)
+    assert np.array_equal(batch.ego[0], alone.ego[0])
