@@ -369,38 +369,21 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
                               "generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res)}
-    starts = _fix_candidates(res, run.cfg.h1_limit_m2)
+    chosen = _choose_fix(res, run.cfg.h1_limit_m2)
     evaluations = res.evaluations
-    if starts:
-        # the search's h2 compares fixes at whatever magnitude it happened to try; a fix is
-        # judged after shrinking, so the best few distinct parameter sets are each shrunk and
-        # the smallest result wins
-        run.progress("minimise", {"parameters": len(starts[0].mutation.values)})
-        shrunk: list[tuple[float, tuple[str, ...], Mutation, Candidate]] = []
-        tried: set[frozenset[str]] = set()
-        n_min = 0
-        for start in starts:
-            limit = max(run.cfg.h1_limit_m2, start.objectives[0])
+    if chosen is not None:
+        limit = max(run.cfg.h1_limit_m2, chosen.objectives[0])
 
-            def holds(ms: list[Mutation], limit: float = limit) -> list[bool]:
-                return [not is_accident(r.outcome)
-                        and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
-                        for r in run_fixes(ms)]
+        def holds(ms: list[Mutation]) -> list[bool]:
+            return [not is_accident(r.outcome) and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
+                    for r in run_fixes(ms)]
 
-            small, n1 = shrink_set(start.mutation, holds)
-            n_min += n1
-            if frozenset(small.names) in tried:
-                continue
-            tried.add(frozenset(small.names))
-            small, n2 = shrink_magnitudes(small, space, holds)
-            n_min += n2
-            shrunk.append((space.distance(small), small.names, small, start))
-        _, _, small, chosen = min(shrunk, key=lambda t: (t[0], t[1]))
-        evaluations += n_min
+        run.progress("minimise", {"parameters": len(chosen.mutation.values)})
+        small, n1 = shrink_set(chosen.mutation, holds)
+        small, n2 = shrink_magnitudes(small, space, holds)
+        evaluations += n1 + n2
         result["search_best"] = _cand_json(chosen)
-        result["minimise_evaluations"] = n_min
-        result["shrunk_fixes"] = [{"fix": {k: float(v) for k, v in m.values.items()}, "h2": h2}
-                                  for h2, _, m, _ in shrunk]
+        result["minimise_evaluations"] = n1 + n2
         result["fix"] = {k: float(v) for k, v in small.values.items()}
         result["misconfiguration"] = [
             {"module": n.split(".", 1)[0], "parameter": n, "original": space.variable(n).original,
@@ -419,30 +402,16 @@ def _first_fix(res: SearchResult) -> int | None:
     return None
 
 
-#: How many distinct parameter sets from the search are shrunk before the fix is chosen.
-FIX_STARTS = 3
-
-
-def _fix_candidates(res: SearchResult, h1_limit: float) -> list[Candidate]:
-    """Starting points for minimisation: among feasible fixes that keep the ego's earlier
-    trajectory (h1 <= limit), the smallest changes (h2) with distinct parameter sets, at most
-    :data:`FIX_STARTS`; when none keeps it, the one fix that changes it least."""
+def _choose_fix(res: SearchResult, h1_limit: float) -> Candidate | None:
+    """Among feasible fixes that keep the ego's earlier trajectory (h1 <= limit), the
+    smallest change (h2); when none keeps it, the one that changes it least."""
     feasible = res.feasible
     if not feasible:
-        return []
-    keep = sorted((c for c in feasible if c.objectives[0] <= h1_limit),
-                  key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names))
-    if not keep:
-        return [min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))]
-    out: list[Candidate] = []
-    seen: set[frozenset[str]] = set()
-    for c in keep:
-        if frozenset(c.mutation.names) not in seen:
-            seen.add(frozenset(c.mutation.names))
-            out.append(c)
-        if len(out) == FIX_STARTS:
-            break
-    return out
+        return None
+    keep = [c for c in feasible if c.objectives[0] <= h1_limit]
+    if keep:
+        return min(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names))
+    return min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))
 
 
 # -- phase V: validation ---------------------------------------------------------------------
