@@ -319,6 +319,16 @@ for _p in _INVENTORY:
     PARAMETERS[_p.full_name] = _p
 
 
+#: Parameters that cap how hard the ego may brake or switch a braking safeguard off. Lowering
+#: them hides an emergency-braking accident from the oracle (the ego brakes at 3.9 m/s^2 and
+#: runs the light instead) rather than removing its cause, so the cyber search leaves them alone.
+BRAKING_LIMITS = frozenset({
+    "canbus.brake_max_decel_mps2", "control.max_decel_cmd_mps2", "control.estop_brake_pct",
+    "planning.max_decel_mps2", "planning.emergency_decel_mps2",
+    "planning.perception_brake_decel_mps2", "planning.perception_brake_enabled",
+})
+
+
 def parameters(module: str | None = None) -> list[Param]:
     """Parameters of one module (or all), in inventory order."""
     return [p for p in _INVENTORY if module is None or p.module == module]

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from rocas.ads.params import MODULES, parameters
+from rocas.ads.params import BRAKING_LIMITS, MODULES, parameters
 from rocas.errors import UsageError
 from rocas.search.space import MutationSpace, Variable
 
 
 def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpace:
-    """The parameters of ``module`` (all modules when None) as a mutation space.
+    """The parameters of ``module`` (all modules when None) as a mutation space, without the
+    :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident).
 
     Args:
         module: the initial deviating module, or None for ``--scope all``.
@@ -20,6 +21,8 @@ def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpa
         raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(MODULES)}")
     out = []
     for p in parameters(module):
+        if p.full_name in BRAKING_LIMITS:
+            continue
         value = float(current.get(p.full_name, p.default))
         kind = "int" if p.is_integer else "real"
         out.append(Variable(p.full_name, p.module, kind, int(value) if kind == "int" else value,

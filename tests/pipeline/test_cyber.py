@@ -1,0 +1,28 @@
+"""The cyber mutation space: one module's parameters at their values in force, never the
+braking limits (capping braking hides an emergency instead of avoiding it)."""
+
+import pytest
+
+from rocas.ads.params import BRAKING_LIMITS, PARAMETERS, parameters
+from rocas.errors import UsageError
+from rocas.pipeline.cyber import cyber_space
+
+
+def test_the_space_is_the_module_without_its_braking_limits():
+    space = cyber_space("planning", {"planning.yield_distance_m": 9.0})
+    names = {v.name for v in space.variables}
+    expected = {p.full_name for p in parameters("planning")} - BRAKING_LIMITS
+    assert names == expected
+    assert "planning.max_decel_mps2" not in names and "planning.yield_distance_m" in names
+    assert space.variable("planning.yield_distance_m").original == 9.0
+
+
+def test_scope_all_spans_every_module_and_still_leaves_out_the_limits():
+    names = {v.name for v in cyber_space(None, {}).variables}
+    assert names == set(PARAMETERS) - BRAKING_LIMITS
+    assert BRAKING_LIMITS <= set(PARAMETERS)
+
+
+def test_an_unknown_module_is_refused():
+    with pytest.raises(UsageError, match="no parameters for module"):
+        cyber_space("radar", {})
