@@ -37,9 +37,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     trig = physical.get("triggering_entity")
     module = diff.get("deviating_module")
     mis = cyber.get("misconfiguration", [])
-    from rocas.ads.params import PARAMETERS
+    from rocas.ads.params import BRAKING_LIMITS, PARAMETERS
 
     searched = cyber.get("parameters")
+    total = len(PARAMETERS) - len(BRAKING_LIMITS)  # what --scope all searches
     report = {
         "verdict": verdict,
         "explanation": "",
@@ -50,8 +51,8 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "path": diff.get("path", []),
         "misconfiguration": mis,
         "validation": done.get("validation"),
-        "search_space": {"parameters_searched": searched, "parameters_total": len(PARAMETERS),
-                         "reduction": (1 - searched / len(PARAMETERS)) if searched else None,
+        "search_space": {"parameters_searched": searched, "parameters_total": total,
+                         "reduction": (1 - searched / total) if searched else None,
                          "scope": cyber.get("scope")},
         "first_fix_evaluation": cyber.get("first_fix_evaluation"),
         "evaluations": dict(state["evaluations"]),
