@@ -311,14 +311,24 @@ def _choose_trigger(res: SearchResult, space: MutationSpace) -> Candidate | None
        best): a good reference differs from the accident only where it must;
     2. then the fewest mutated entities (the triggering entity, not a coalition);
     3. then the most suspicious (f1: close to and in front of the ego);
-    4. then the smallest change (f3), and the names, for determinism.
+    4. then the smallest change (f3);
+    5. then changing a property over removing an entity (``enabled`` -> off): a reference that
+       keeps every entity differs from the accident only in that property, which is what the
+       diff should see;
+    6. then the names, for determinism.
     """
     if not res.front:
         return None
     best_f2 = min(c.objectives[1] for c in res.front)
     similar = [c for c in res.front if c.objectives[1] <= best_f2 + F2_TOLERANCE_M2]
     return min(similar, key=lambda c: (len(mutated_entities(space, c.mutation)), c.objectives[0],
-                                       c.objectives[2], c.objectives[1], c.mutation.names))
+                                       c.objectives[2], _removals(c.mutation), c.objectives[1],
+                                       c.mutation.names))
+
+
+def _removals(m: Mutation) -> int:
+    """How many entities a mutation removes (an ``enabled`` property switched off)."""
+    return sum(1 for n, v in m.values.items() if n.endswith(".enabled") and not v)
 
 
 # -- phase III: differential analysis --------------------------------------------------------

@@ -26,3 +26,4 @@ def test_scope_all_spans_every_module_and_still_leaves_out_the_limits():
 def test_an_unknown_module_is_refused():
     with pytest.raises(UsageError, match="no parameters for module"):
         cyber_space("radar", {})
+
