@@ -272,19 +272,19 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
         # drop properties the avoidance does not need (a search often carries passengers,
         # e.g. a 0.0001 m move of a bystander), keeping the reference as similar as chosen
         f2_limit = chosen.objectives[1] + F2_TOLERANCE_M2
+        scored: dict[Mutation, tuple[tuple[float, ...], float]] = {}
 
         def holds(ms: list[Mutation]) -> list[bool]:
-            scored = batch(ms)
-            return [c <= 0.0 and obj[1] <= f2_limit for obj, c in scored]
+            scored.update(zip(ms, batch(ms), strict=True))
+            return [scored[m][1] <= 0.0 and scored[m][0][1] <= f2_limit for m in ms]
 
         small, n_shrink = shrink_set(chosen.mutation, holds)
         evaluations += n_shrink
         result["shrink_evaluations"] = n_shrink
         result["search_chosen"] = _cand_json(chosen)
-        if small != chosen.mutation:
-            (objs, cons), = batch([small])
+        if small != chosen.mutation:  # a trial that held: its objectives are already known
+            objs, cons = scored[small]
             chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
-            evaluations += 1
         entity = mutated_entities(space, chosen.mutation)
         result["chosen"] = _cand_json(chosen)
         result["triggering_entity"] = {

@@ -37,10 +37,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     trig = physical.get("triggering_entity")
     module = diff.get("deviating_module")
     mis = cyber.get("misconfiguration", [])
-    from rocas.ads.params import BRAKING_LIMITS, PARAMETERS
+    from rocas.pipeline.cyber import cyber_space
 
     searched = cyber.get("parameters")
-    total = len(PARAMETERS) - len(BRAKING_LIMITS)  # what --scope all searches
+    total = len(cyber_space(None, {}).variables)  # what --scope all searches
     report = {
         "verdict": verdict,
         "explanation": "",

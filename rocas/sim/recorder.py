@@ -106,8 +106,7 @@ class ScenarioRecorder:
             "outcome": outcome.summary(),
             "collided": str(outcome.collided).lower(),
             "collision_with": outcome.collision_with or "",
-            "collision_time_s": "" if outcome.collision_time_s is None
-            else repr(outcome.collision_time_s),
+            "collision_time_s": _opt(outcome.collision_time_s),
             "collision_kind": outcome.collision_kind or "",
             "collision_position": "" if outcome.collision_position is None
             else json.dumps([float(v) for v in outcome.collision_position]),
