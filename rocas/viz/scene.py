@@ -311,6 +311,12 @@ def _priority(topic: str, schema: str, words: tuple[str, ...]) -> int:
     return 0 if any(w in text for w in words) else 1
 
 
+def _prefer(topic: str, schema: str, current: str | None, words: tuple[str, ...]) -> bool:
+    """Whether ``topic`` should replace ``current`` as the source of one kind of data: the
+    first candidate, or one whose name says it is that kind when the current one's does not."""
+    return current is None or _priority(topic, schema, words) < _priority(current, "", words)
+
+
 class _ChannelReader:
     """How one channel's messages are read (decided from the first message's descriptor)."""
 
@@ -467,19 +473,11 @@ def load_execution(path: str | os.PathLike[str]) -> Execution:
             readers[topic] = r
             if r is not None:
                 schema = m.channel.schema_name
-                if r.pose is not None and (
-                    pose_topic is None
-                    or _priority(topic, schema, ("pose", "locali"))
-                    < _priority(pose_topic, "", ("pose", "locali"))
-                ):
+                if r.pose is not None and _prefer(topic, schema, pose_topic, ("pose", "locali")):
                     pose_topic = topic
                 if r.obstacles and obstacle_topic is None:
                     obstacle_topic = topic
-                if r.plan and (
-                    plan_topic is None
-                    or _priority(topic, schema, ("plan", "trajector"))
-                    < _priority(plan_topic, "", ("plan", "trajector"))
-                ):
+                if r.plan and _prefer(topic, schema, plan_topic, ("plan", "trajector")):
                     plan_topic = topic
                 if r.prediction and pred_topic is None:
                     pred_topic = topic

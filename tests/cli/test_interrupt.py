@@ -4,6 +4,7 @@ that looks complete but is not."""
 from __future__ import annotations
 
 import os
+import pkgutil
 
 import pytest
 
@@ -11,15 +12,10 @@ from rocas.recording.reader import open_recording
 
 
 def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
-    """Make ``target`` (module.attr path) raise KeyboardInterrupt on call number ``calls + 1``."""
-    mod_name, _, attr = target.rpartition(".")
-    import importlib
-
-    try:
-        owner = importlib.import_module(mod_name)
-    except ModuleNotFoundError:  # a method: module.Class.method
-        mod_name, _, cls = mod_name.rpartition(".")
-        owner = getattr(importlib.import_module(mod_name), cls)
+    """Make ``target`` (``module.attr`` or ``module.Class.method``) raise KeyboardInterrupt
+    on call number ``calls + 1``."""
+    owner_path, _, attr = target.rpartition(".")
+    owner = pkgutil.resolve_name(owner_path)
     original = getattr(owner, attr)
     seen = {"n": 0}
 
