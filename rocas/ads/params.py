@@ -223,6 +223,8 @@ _INVENTORY: tuple[Param, ...] = (
        "longitudinal buffer added around ST-overlap regions"),
     _P("planning", "yield_distance_m", 6.0, 0.0, 20.0, "m",
        "gap kept before the region a yielded obstacle crosses"),
+    _P("planning", "yield_time_headway_s", 0.5, 0.0, 4.0, "s",
+       "time headway of the stop before a yielded region (the follow headway's counterpart)"),
     _P("planning", "min_overtake_distance_m", 3.0, 0.0, 40.0, "m",
        "margin beyond an overlap region the ego must reach to overtake"),
     _P("planning", "overtake_time_buffer_s", 1.0, 0.0, 5.0, "s",
