@@ -22,6 +22,14 @@ into the neighbouring bin in one recording and so goes unpaired) raise it, so ra
 short baseline happened not to contain do not become change points. The floor keeps a
 noiseless series (identical runs) from making every wiggle a change point. An explicit
 ``penalty`` replaces the formula.
+
+A change that builds up over a bin or two (a channel whose first differing message differs in
+fewer fields than the ones after it: 0, 0.05, 0.1, ...) is placed by the l2 cost at its larger
+step. Each change point is therefore moved back to the onset of the run of bins just before it
+that have already left the previous segment's level, in the direction of the change: raw values
+beyond that segment's level by more than three of its standard deviations (a deterministic
+baseline has none, so any departure counts), at most ``smooth_bins // 2`` bins, the most the
+running median can delay an edge.
 """
 
 from __future__ import annotations
@@ -117,5 +125,28 @@ def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> C
 
     algo = ruptures.KernelCPD(kernel="linear", min_size=cfg.min_size, jump=1)
     ends = algo.fit(values.reshape(-1, 1)).predict(pen=penalty)
-    idx = tuple(int(e) for e in ends[:-1])  # the last end is len(values)
+    idx = _onsets(raw, values, [int(e) for e in ends[:-1]], cfg.smooth_bins // 2)  # last end: len
     return ChangePoints(tuple(float(times_s[i]) for i in idx), idx, penalty, std)
+
+
+def _onsets(raw: np.ndarray, smooth: np.ndarray, ends: list[int], reach: int) -> tuple[int, ...]:
+    """Each change point moved back to the onset of its change (see the module docstring).
+
+    Args:
+        raw: (n,) the series; smooth: (n,) after the running median; ends: change point indices
+        (ascending); reach: most bins a change point moves.
+    """
+    out: list[int] = []
+    for i, k in enumerate(ends):
+        start = out[-1] if out else 0
+        stop = ends[i + 1] if i + 1 < len(ends) else len(raw)
+        before, after = raw[start:max(start + 1, k - reach)], smooth[k:stop]
+        level, new = float(np.median(before)), float(np.median(after))
+        tol = 3.0 * float(np.std(before)) + 1e-12
+        sign = 1.0 if new > level else -1.0
+        j = k
+        while j - 1 > start and k - (j - 1) <= reach and sign * (raw[j - 1] - level) > tol \
+                and sign * (raw[j - 1] - new) <= tol:
+            j -= 1
+        out.append(j)
+    return tuple(out)

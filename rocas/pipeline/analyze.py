@@ -378,7 +378,7 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
                               "generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
-                              "first_fix_evaluation": _first_fix(res)}
+                              "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2)}
     chosen = _choose_fix(res, run.cfg.h1_limit_m2)
     evaluations = res.evaluations
     if chosen is not None:
@@ -405,9 +405,12 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     return result
 
 
-def _first_fix(res: SearchResult) -> int | None:
+def _first_fix(res: SearchResult, h1_limit: float) -> int | None:
+    """How many simulations the search ran up to its first fix: a candidate that avoids the
+    accident and keeps the ego's earlier trajectory (h1 within the limit), i.e. one that
+    :func:`_choose_fix` would accept as it stands."""
     for i, c in enumerate(res.candidates, 1):
-        if c.feasible:
+        if c.feasible and c.objectives[0] <= h1_limit:
             return i
     return None
 

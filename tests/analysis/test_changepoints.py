@@ -62,3 +62,25 @@ def test_median_filter_removes_impulses_and_keeps_steps():
     assert out[3] == 0
     assert list(np.nonzero(out >= 5)[0]) == [7, 8, 9, 10, 11]
     assert median_filter(y, 1) is y
+
+
+
+# the traffic-light channel of catalog entry A10 against a reference with the side light held at
+# yellow: a far light differs slightly from 1.9 to 4.4 s; at 7.0 s the selected light's colour
+# differs (one field), from 7.1 s its confidence too, at 8.0 s the ego has stopped elsewhere
+A10_TRAFFIC_LIGHT = [0.0] * 19 + [0.025] * 26 + [0.0] * 25 + [0.05] + [0.1] * 9 + [0.75] * 5
+
+
+def test_a_change_that_builds_up_is_dated_at_its_onset():
+    values = np.array(A10_TRAFFIC_LIGHT)
+    cps = detect(values, np.arange(len(values)) * 0.1, ChangePointConfig())
+    assert cps.indices[0] == 70
+
+
+def test_onset_ignores_a_noisy_baseline_and_stays_within_the_median_reach():
+    rng = np.random.default_rng(3)
+    values = np.concatenate([rng.normal(0.2, 0.01, 60), [0.205], np.full(20, 0.6)])
+    cps = detect(values, np.arange(len(values)) * 0.1, ChangePointConfig())
+    assert cps.indices[0] == 61  # 0.205 is within the baseline's noise
+    far = np.array([0.0] * 40 + [0.02] * 6 + [0.5] * 20)
+    assert detect(far, np.arange(len(far)) * 0.1, ChangePointConfig()).indices[0] >= 44
