@@ -330,6 +330,17 @@ BRAKING_LIMITS = frozenset({
     "planning.perception_brake_decel_mps2", "planning.perception_brake_enabled",
 })
 
+#: Parameters that bound what perception can sense: detection ranges and fields of view. Shrinking
+#: one avoids an accident by no longer seeing what the ADS misjudged (the red truck beyond 31 m,
+#: the side road's light outside a narrow view), which hides the cause as a braking cap would, so
+#: the cyber search may widen them but never narrow them.
+SENSING_LIMITS = frozenset({
+    "perception.max_range_m", "perception.fov_deg", "perception.rear_range_m",
+    "perception.pedestrian_range_m", "perception.static_object_range_m",
+    "perception.camera_range_m", "perception.color_max_distance_m",
+    "perception.tl_max_range_m", "perception.tl_fov_deg",
+})
+
 
 def parameters(module: str | None = None) -> list[Param]:
     """Parameters of one module (or all), in inventory order."""

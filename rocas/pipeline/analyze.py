@@ -79,6 +79,8 @@ class AnalyzeConfig:
         k_suspicion: K of f1 [m].
         h1_limit_m2: a fix may change the ego's trajectory before the accident by at most
             this MSE [m^2] (fixes beyond it count only when no other exists).
+        shrink_candidates: how many of the search's best fixes (distinct parameter sets) are
+            shrunk before the smallest is chosen.
     """
 
     seed: int = 0
@@ -92,6 +94,7 @@ class AnalyzeConfig:
     validation_variants: int = 200
     k_suspicion: float = 10.0
     h1_limit_m2: float = 1.0
+    shrink_candidates: int = 3
 
     def __post_init__(self) -> None:
         if self.scope not in ("module", "all"):
@@ -100,6 +103,8 @@ class AnalyzeConfig:
             raise UsageError(f"--budget must be at least the population ({self.population})")
         if self.validation_variants < 0:
             raise UsageError("--validation must be zero or positive")
+        if self.shrink_candidates < 1:
+            raise UsageError("shrink_candidates must be at least 1")
 
     def search(self, stage: int, n_vars: int = 0) -> SearchConfig:
         """Stage 1: physical (single-property seeds). Stage 2: cyber (screening first, which
@@ -379,21 +384,31 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
                               "generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2)}
-    chosen = _choose_fix(res, run.cfg.h1_limit_m2)
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates)
     evaluations = res.evaluations
-    if chosen is not None:
-        limit = max(run.cfg.h1_limit_m2, chosen.objectives[0])
+    if candidates:
+        # the search ranks fixes by the size it happened to try; each of the best few is shrunk
+        # (set, then magnitudes) and the smallest shrunk fix wins
+        shrunk = []
+        run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
+        for cand in candidates:
+            limit = max(run.cfg.h1_limit_m2, cand.objectives[0])
 
-        def holds(ms: list[Mutation]) -> list[bool]:
-            return [not is_accident(r.outcome) and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
-                    for r in run_fixes(ms)]
+            def holds(ms: list[Mutation], limit: float = limit) -> list[bool]:
+                return [not is_accident(r.outcome)
+                        and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
+                        for r in run_fixes(ms)]
 
-        run.progress("minimise", {"parameters": len(chosen.mutation.values)})
-        small, n1 = shrink_set(chosen.mutation, holds)
-        small, n2 = shrink_magnitudes(small, space, holds)
-        evaluations += n1 + n2
+            small, n1 = shrink_set(cand.mutation, holds)
+            small, n2 = shrink_magnitudes(small, space, holds)
+            evaluations += n1 + n2
+            shrunk.append((space.distance(small), small.names, small, cand, n1 + n2))
+        _, _, small, chosen, _ = min(shrunk, key=lambda x: (x[0], x[1]))
         result["search_best"] = _cand_json(chosen)
-        result["minimise_evaluations"] = n1 + n2
+        result["minimise_evaluations"] = sum(x[4] for x in shrunk)
+        result["shrunk_candidates"] = [
+            {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
+             "h2": round(d, 6)} for d, _, m, c, _ in shrunk]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
         result["misconfiguration"] = [
             {"module": n.split(".", 1)[0], "parameter": n, "original": space.variable(n).original,
@@ -408,23 +423,32 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
 def _first_fix(res: SearchResult, h1_limit: float) -> int | None:
     """How many simulations the search ran up to its first fix: a candidate that avoids the
     accident and keeps the ego's earlier trajectory (h1 within the limit), i.e. one that
-    :func:`_choose_fix` would accept as it stands."""
+    :func:`_fix_candidates` would accept as it stands."""
     for i, c in enumerate(res.candidates, 1):
         if c.feasible and c.objectives[0] <= h1_limit:
             return i
     return None
 
 
-def _choose_fix(res: SearchResult, h1_limit: float) -> Candidate | None:
-    """Among feasible fixes that keep the ego's earlier trajectory (h1 <= limit), the
-    smallest change (h2); when none keeps it, the one that changes it least."""
+def _fix_candidates(res: SearchResult, h1_limit: float, count: int) -> list[Candidate]:
+    """The best ``count`` feasible fixes with distinct parameter sets: those that keep the ego's
+    earlier trajectory (h1 <= limit) by smallest change (h2); when none keeps it, the one
+    that changes it least."""
     feasible = res.feasible
     if not feasible:
-        return None
+        return []
     keep = [c for c in feasible if c.objectives[0] <= h1_limit]
-    if keep:
-        return min(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names))
-    return min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))
+    if not keep:
+        return [min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))]
+    out: list[Candidate] = []
+    seen: set[tuple[str, ...]] = set()
+    for c in sorted(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names)):
+        if c.mutation.names not in seen:
+            seen.add(c.mutation.names)
+            out.append(c)
+        if len(out) == count:
+            break
+    return out
 
 
 # -- phase V: validation ---------------------------------------------------------------------

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from rocas.ads.params import BRAKING_LIMITS, MODULES, parameters
+from rocas.ads.params import BRAKING_LIMITS, MODULES, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.search.space import MutationSpace, Variable
 
 
 def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpace:
     """The parameters of ``module`` (all modules when None) as a mutation space, without the
-    :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident).
+    :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
+    and with the :data:`~rocas.ads.params.SENSING_LIMITS` free to grow only (from their current
+    value to their upper bound: a "fix" that senses less hides the accident too).
 
     Args:
         module: the initial deviating module, or None for ``--scope all``.
@@ -25,6 +27,7 @@ def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpa
             continue
         value = float(current.get(p.full_name, p.default))
         kind = "int" if p.is_integer else "real"
+        low = max(p.low, value) if p.full_name in SENSING_LIMITS else p.low
         out.append(Variable(p.full_name, p.module, kind, int(value) if kind == "int" else value,
-                            low=p.low, high=p.high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
+                            low=low, high=p.high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
     return MutationSpace(tuple(out))

@@ -1,11 +1,13 @@
 """The cyber mutation space: one module's parameters at their values in force, never the
-braking limits (capping braking hides an emergency instead of avoiding it)."""
+braking limits (capping braking hides an emergency instead of avoiding it), and sensing limits
+only widened (narrowing them hides the cause too)."""
 
 import pytest
 
-from rocas.ads.params import BRAKING_LIMITS, PARAMETERS, parameters
+from rocas.ads.params import BRAKING_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.pipeline.cyber import cyber_space
+from rocas.search.space import Mutation
 
 
 def test_the_space_is_the_module_without_its_braking_limits():
@@ -27,3 +29,13 @@ def test_an_unknown_module_is_refused():
     with pytest.raises(UsageError, match="no parameters for module"):
         cyber_space("radar", {})
 
+
+
+def test_sensing_limits_may_only_grow():
+    space = cyber_space("perception", {"perception.camera_range_m": 55.0})
+    cam = space.variable("perception.camera_range_m")
+    assert (cam.original, cam.low, cam.high) == (55.0, 55.0, PARAMETERS["perception.camera_range_m"].high)
+    assert space.variable("perception.brake_threshold").low == PARAMETERS["perception.brake_threshold"].low
+    assert SENSING_LIMITS <= set(PARAMETERS) and not SENSING_LIMITS & BRAKING_LIMITS
+    lowest = Mutation({"perception.camera_range_m": cam.decode(0.0)})
+    assert not space.decode(space.encode(lowest)).values  # narrowing is not in the space
