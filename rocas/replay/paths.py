@@ -12,7 +12,14 @@ from rocas.replay.lanes import arc_length as _arc
 from rocas.replay.lanes import walk_lanes
 from rocas.replay.tracks import Track
 from rocas.scenarios.model import Actor, Lane
-from rocas.sim.actors import ACTOR_ACCEL_MPS2, ACTOR_DECEL_MPS2, SPEED_GAIN_PER_S
+from rocas.sim.actors import (
+    ACTOR_ACCEL_MPS2,
+    ACTOR_DECEL_MPS2,
+    FRONT_AXLE_AHEAD_M,
+    SPEED_GAIN_PER_S,
+    WHEELBASE_M,
+)
+from rocas.sim.world import MODEL_CODES
 
 WAYPOINT_SPACING_M = 0.5     # [m] smallest spacing of waypoints taken from a track
 PROFILE_TOLERANCE_MPS = 0.05  # [m/s] speed-profile knots are dropped within this error
@@ -111,6 +118,10 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     Before its first observation the actor is assumed to have driven at its first observed
     speed along the map (backwards through lane predecessors); after its last one it keeps its
     last speed along the map (first successors).
+
+    The simulator steers a vehicle's front axle along its path and lets the body trail, so a
+    vehicle's path is its front axle's: the perceived centre moved ahead along the perceived
+    body heading (the body's off-tracking in turns is then reproduced, not applied twice).
     """
     t0, t1 = float(track.times[0]), float(track.times[-1])
     # entry speed: the smaller of the derivative at the first sighting and the mean over the
@@ -120,22 +131,30 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     h0 = float(track.heading[0]) if track.speed[0] > 1.0 else hw
     v1, h1 = float(track.speed[-1]), float(track.heading[-1])
     v0 = v0 if v0 >= ENTRY_MOVING_MPS else 0.0  # else it stood there before it was seen
-    keep = np.ones(len(track.times), dtype=bool)
-    times, xy = track.times[keep], track.xy[keep]
+    vehicle = track.kind == "vehicle"
+    model = MODEL_CODES.get(track.model, 0)
+    ahead = float(FRONT_AXLE_AHEAD_M[model]) if vehicle else 0.0
+    wheelbase = float(WHEELBASE_M[model]) if vehicle else 0.0
+    body_h = track.heading if track.body_heading is None else track.body_heading
+    times = track.times
+    xy = track.xy + ahead * np.stack([np.cos(body_h), np.sin(body_h)], axis=1)
     core = _thin(xy, WAYPOINT_SPACING_M)
     moving = len(core) >= 2 and not track.stationary
-    back_len = v0 * t0 if moving else 0.0
+    # the start arc length is the centre's: the front axle starts ``ahead`` farther on
+    back_len = v0 * t0 + ahead if moving else 0.0
     fwd_len = v1 * max(duration_s - t1, 0.0) + 5.0
     back = walk_lanes(lanes, core[0], h0, back_len, forward=False)
     if not moving:
-        h = track.heading_at(t0)
-        d = 0.25 * np.array([np.cos(h), np.sin(h)])
-        core = np.vstack([xy[0] - d, xy[0] + d])
+        h = float(body_h[0])
+        d = np.array([np.cos(h), np.sin(h)])
+        # room behind the front axle for the rear axle, so the body starts on the heading
+        core = np.vstack([xy[0] - (0.25 + wheelbase) * d, xy[0] + 0.25 * d])
     fwd = walk_lanes(lanes, core[-1], h1, fwd_len, forward=True) \
         if moving else np.zeros((0, 2))
     path = _thin(np.vstack([back, core, fwd]), 0.05)
     start_core = float(_arc(np.vstack([back, core[:1]]))[-1]) if len(back) else 0.0
-    s_core = start_core + _progress(core, xy) if moving else np.full(len(times), 0.25)
+    s_core = start_core + _progress(core, xy) if moving else np.full(len(times),
+                                                                     0.25 + wheelbase)
     tt = [np.array([0.0])] if t0 > 0 else []
     ss = [np.array([s_core[0] - v0 * t0])] if t0 > 0 else []
     tt.append(times)
@@ -144,12 +163,12 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
         tt.append(np.array([duration_s + 1.0]))
         ss.append(np.array([s_core[-1] + v1 * (duration_s + 1.0 - t1)]))
     t_all, s_all = np.concatenate(tt), np.concatenate(ss)
-    start = max(float(s_all[0]), 0.0)
+    start = max(float(s_all[0]), ahead)
     profile = design_profile(t_all, s_all - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
     return Actor(
         id=track.name, kind=track.kind, model=track.model, color=track.color, route=(),
         waypoints=tuple((round(float(x), 4), round(float(y), 4)) for x, y in path),
-        start_s_m=round(start, 4), speed_profile=profile, reactive=False,
+        start_s_m=round(start - ahead, 4), speed_profile=profile, reactive=False,
     )
 
 
