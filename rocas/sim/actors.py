@@ -141,11 +141,14 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
         speed=np.where(is_veh, veh.speed, v_pt))
     # the body trails the front axle (points: the body is the guide)
     ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
+    # (a vehicle's body ``course`` holds its trailing axis, rear axle -> front axle; its
+    # ``yaw`` adds the front axle's slip, so a sliding vehicle's body points inside its motion)
     back = wb - ahead
-    rear_x = b.x - back * np.cos(b.yaw)
-    rear_y = b.y - back * np.sin(b.yaw)
+    rear_x = b.x - back * np.cos(b.course)
+    rear_y = b.y - back * np.sin(b.course)
     bx, by, byaw = trail_body(guide.x, guide.y, rear_x, rear_y, guide.yaw, ahead, wb)
-    body = VehicleState(x=bx, y=by, yaw=byaw,
+    slip = np.where(is_veh, wrap_angle(guide.yaw - guide.course), 0.0)
+    body = VehicleState(x=bx, y=by, yaw=np.where(is_veh, wrap_angle(byaw + slip), byaw),
                         course=np.where(is_veh, byaw, guide.course), speed=guide.speed)
     s_new = np.where(is_veh, v_idx * ds, s_pt)
     idx = np.where(is_veh, v_idx, np.round(s_pt / ds).astype(np.int64))
