@@ -219,8 +219,14 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     """
     t0, t1 = float(track.times[0]), float(track.times[-1])
     # entry speed: the smaller of the derivative at the first sighting and the mean over the
-    # first second (a standing pedestrian's noise must not set it walking before it was seen)
+    # first second (a standing pedestrian's noise must not set it walking before it was seen),
+    # that mean taken back to the first sighting along the speed's trend over the second (an
+    # actor first seen while braking was faster then than on average over the second)
     vw, hw = track.velocity_between(t0, t0 + ENDPOINT_WINDOW_S)
+    first = track.times <= t0 + ENDPOINT_WINDOW_S + 1e-9
+    if first.sum() >= 3:
+        trend = float(np.polyfit(track.times[first] - t0, track.speed[first], 1)[0])
+        vw = max(vw - 0.5 * ENDPOINT_WINDOW_S * trend, 0.0)
     v0 = min(float(track.speed[0]), vw)
     h0 = float(track.heading[0]) if track.speed[0] > 1.0 else hw
     v1, h1 = float(track.speed[-1]), float(track.heading[-1])

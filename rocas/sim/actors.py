@@ -148,7 +148,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     rear_y = b.y - back * np.sin(b.course)
     bx, by, byaw = trail_body(guide.x, guide.y, rear_x, rear_y, guide.yaw, ahead, wb)
     slip = np.where(is_veh, wrap_angle(guide.yaw - guide.course), 0.0)
-    body = VehicleState(x=bx, y=by, yaw=np.where(is_veh, wrap_angle(byaw + slip), byaw),
+    body = VehicleState(x=bx, y=by, yaw=np.where(slip != 0.0, wrap_angle(byaw + slip), byaw),
                         course=np.where(is_veh, byaw, guide.course), speed=guide.speed)
     s_new = np.where(is_veh, v_idx * ds, s_pt)
     idx = np.where(is_veh, v_idx, np.round(s_pt / ds).astype(np.int64))
