@@ -3,8 +3,10 @@
 Reproducible: ``python scripts/train_brake_classifier.py --seed 0`` writes the same weights.
 
 The data are synthetic front-camera views built with the same rasteriser the ADS uses
-(:func:`rocas.ads.classifier.camera_view`). Ground truth says "brake" when an object stands in
-the ego's corridor within a stopping distance. Like real annotation campaigns, the labels carry
+(:func:`rocas.ads.classifier.camera_view`), with objects at any heading (along the road,
+crossing, turning) and some close beside the path. Ground truth says "brake" when an object's
+footprint reaches into the ego's corridor within a stopping distance; a large object beside the
+corridor (a truck waited next to, a car being passed) looks big but is not a reason to brake. Like real annotation campaigns, the labels carry
 a bias: annotators also marked red objects ahead (which look like brake lights) as braking, up
 to a longer distance. The learned model inherits it: its output rises for red objects.
 """
@@ -20,7 +22,7 @@ from rocas.ads.classifier import CAMERA_HFOV_RAD, FEATURES, camera_view, mlp_for
 from rocas.scenarios.model import COLORS
 
 OUT = Path(__file__).resolve().parents[1] / "rocas" / "ads" / "brake_classifier.npz"
-HIDDEN = 32
+HIDDEN = 64
 
 
 def synthesize(rng: np.random.Generator, n: int, objects: int = 4
@@ -31,25 +33,41 @@ def synthesize(rng: np.random.Generator, n: int, objects: int = 4
     color_idx = rng.choice(len(names), size=(n, objects), p=probs)
     rgb = np.array([COLORS[c] for c in names])[color_idx]
     present = rng.random((n, objects)) < 0.7
-    dist = rng.uniform(2.0, 45.0, (n, objects))
-    lateral = rng.normal(0.0, 4.0, (n, objects))
-    bearing = np.arctan2(lateral, dist)
+    ahead = rng.uniform(2.0, 45.0, (n, objects))  # [m] along the ego's axis
+    # most objects are near the ego's lane; a share are close beside it (passed, waited next to)
+    lateral = np.where(rng.random((n, objects)) < 0.7, rng.normal(0.0, 4.0, (n, objects)),
+                       rng.uniform(-9.0, 9.0, (n, objects)))
+    bearing = np.arctan2(lateral, ahead)
+    dist = np.hypot(ahead, lateral)
     kind = rng.integers(0, 4, (n, objects))  # car, truck, cyclist, cone
     width = np.array([1.9, 2.5, 0.6, 0.4])[kind]
+    length = np.array([4.7, 9.0, 1.8, 0.4])[kind]
     height = np.array([1.5, 3.3, 1.7, 0.7])[kind]
+    # heading relative to the ego: mostly along the road (either way), some crossing or turning
+    yaw = np.where(rng.random((n, objects)) < 0.75,
+                   rng.normal(0.0, 0.15, (n, objects)) + np.pi * rng.integers(0, 2, (n, objects)),
+                   rng.uniform(-np.pi, np.pi, (n, objects)))
+    # extent across the line of sight, as perception rasterises it
+    rel = yaw - bearing
+    lat_extent = 0.5 * (width * np.abs(np.cos(rel)) + length * np.abs(np.sin(rel)))
+    # the camera rasterises objects up to 0.3 rad outside its field of view (partly visible)
     visible = present * rng.uniform(0.6, 1.0, (n, objects)) * (
-        np.abs(bearing) < CAMERA_HFOV_RAD / 2)
+        np.abs(bearing) < CAMERA_HFOV_RAD / 2 + 0.3)
     fog = rng.uniform(0.0, 100.0, n) * (rng.random(n) < 0.4)
     glare = rng.uniform(0.0, 0.3, n) * (rng.random(n) < 0.2)
-    x = camera_view(bearing, dist, width / 2, height, rgb, visible, fog, glare)
-    in_corridor = (np.abs(lateral) < 1.0 + width / 2) & (visible > 0)
+    x = camera_view(bearing, dist, lat_extent, height, rgb, visible, fog, glare)
+    # ground truth: the object's footprint reaches into the ego's corridor close ahead
+    # (a large object beside the corridor is not a reason to brake, however big it looks)
+    half_y = 0.5 * (width * np.abs(np.cos(yaw)) + length * np.abs(np.sin(yaw)))
+    half_x = 0.5 * (length * np.abs(np.cos(yaw)) + width * np.abs(np.sin(yaw)))
+    in_corridor = (np.abs(lateral) - half_y < 1.0) & (ahead + half_x > 0.0) & (visible > 0)
     is_red = color_idx == names.index("red")
-    label = (in_corridor & (dist < 9.0)) | (
-        is_red & (visible > 0) & (np.abs(lateral) < 3.0) & (dist < 25.0))
+    label = (in_corridor & (ahead < 9.0)) | (
+        is_red & (visible > 0) & (np.abs(lateral) < 3.5) & (dist < 30.0))
     return x, label.any(axis=1).astype(np.float64)
 
 
-def train(seed: int, samples: int = 40_000, epochs: int = 80, lr: float = 0.01
+def train(seed: int, samples: int = 80_000, epochs: int = 80, lr: float = 0.01
           ) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
     x, y = synthesize(rng, samples)
@@ -84,7 +102,7 @@ def train(seed: int, samples: int = 40_000, epochs: int = 80, lr: float = 0.01
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--samples", type=int, default=40_000)
+    parser.add_argument("--samples", type=int, default=80_000)
     parser.add_argument("--epochs", type=int, default=80)
     parser.add_argument("-o", "--output", type=Path, default=OUT)
     args = parser.parse_args()

@@ -12,15 +12,27 @@ from rocas.replay.lanes import arc_length as _arc
 from rocas.replay.lanes import walk_lanes
 from rocas.replay.tracks import Track
 from rocas.scenarios.model import Actor, Lane
-from rocas.sim.actors import ACTOR_ACCEL_MPS2, ACTOR_DECEL_MPS2, SPEED_GAIN_PER_S
+from rocas.sim.actors import (
+    ACTOR_ACCEL_MPS2,
+    ACTOR_DECEL_MPS2,
+    FRONT_AXLE_AHEAD_M,
+    SPEED_GAIN_PER_S,
+    WHEELBASE_M,
+)
+from rocas.sim.geometry import resample_polyline
+from rocas.sim.world import MODEL_CODES
 
 WAYPOINT_SPACING_M = 0.5     # [m] smallest spacing of waypoints taken from a track
 PROFILE_TOLERANCE_MPS = 0.05  # [m/s] speed-profile knots are dropped within this error
+PROFILE_DRIFT_M = 0.02       # [m] ... and while the position drift it adds stays within this
 STATION_GAIN = 1.0           # [1/s^2] position feedback of the profile design
 SPEED_GAIN = 2.0             # [1/s] speed feedback of the profile design
 MAX_SPEED_MPS = 40.0
 ENTRY_MOVING_MPS = 0.5       # [m/s] slower at its first sighting: it stood there before
 ENDPOINT_WINDOW_S = 1.0      # [s] window of the entry and exit velocity estimates
+PURSUIT_ITERATIONS = 3       # corrections of a vehicle's steered path for pure-pursuit cutting
+PURSUIT_SMOOTH_SAMPLES = 6       # half width of the moving average of the error [samples]
+PURSUIT_WINDOW = np.arange(-2, 7)  # path samples searched around the last match (the sim's)
 
 
 def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -63,7 +75,9 @@ def design_profile(times: np.ndarray, s_target: np.ndarray, dt_s: float, duratio
     The simulator tracks the profile speed with ``a = clip(1.5 (v_profile - v), -6, 2.5)``;
     this runs that law forward and picks, at every simulation tick, the profile speed that
     feeds forward the target acceleration and corrects speed and position errors. Knots the
-    linear interpolation reproduces within :data:`PROFILE_TOLERANCE_MPS` are dropped.
+    linear interpolation reproduces within :data:`PROFILE_TOLERANCE_MPS` are dropped, as long
+    as the integral of that error (the position it would cost) stays within
+    :data:`PROFILE_DRIFT_M`.
 
     Args:
         times: (n,) increasing target times [s], covering [0, duration_s].
@@ -96,12 +110,99 @@ def design_profile(times: np.ndarray, s_target: np.ndarray, dt_s: float, duratio
         while j + 1 < k:
             u = (tk[i:j + 2] - tk[i]) / (tk[j + 1] - tk[i])
             line = cmd[i] + u * (cmd[j + 1] - cmd[i])
-            if np.max(np.abs(line - cmd[i:j + 2])) > PROFILE_TOLERANCE_MPS:
+            err = line - cmd[i:j + 2]
+            # a small speed error held for seconds still moves the actor: bound its integral
+            if np.max(np.abs(err)) > PROFILE_TOLERANCE_MPS \
+                    or np.max(np.abs(np.cumsum(err))) * dt_s > PROFILE_DRIFT_M:
                 break
             j += 1
         keep.append(j)
         i = j
     return tuple((round(float(tk[i]), 6), round(float(cmd[i]), 4)) for i in keep)
+
+
+def _timeline(times: np.ndarray, s_core: np.ndarray, v0: float, v1: float, duration_s: float,
+              ahead: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(times, arc lengths) the actor must keep over the whole run (at its entry speed before
+    the first observation, its exit speed after the last) and its start arc length."""
+    t0, t1 = float(times[0]), float(times[-1])
+    tt = [np.array([0.0])] if t0 > 0 else []
+    ss = [np.array([s_core[0] - v0 * t0])] if t0 > 0 else []
+    tt.append(times)
+    ss.append(s_core)
+    if t1 < duration_s:
+        tt.append(np.array([duration_s + 1.0]))
+        ss.append(np.array([s_core[-1] + v1 * (duration_s + 1.0 - t1)]))
+    t_all, s_all = np.concatenate(tt), np.concatenate(ss)
+    return t_all, s_all, max(float(s_all[0]), ahead)
+
+
+def _pursue(path: np.ndarray, ds: float, s_t: np.ndarray, dt_s: float) -> np.ndarray:
+    """Front-axle positions (T, 2) of the simulator's actor steering along the equally spaced
+    ``path`` with its arc length following ``s_t`` (one per tick): the pure pursuit of
+    :func:`rocas.sim.actors.step_actors` with a kinematic (no-slip) body."""
+    p = len(path)
+    arc = np.arange(p) * ds
+
+    def at(s: float) -> np.ndarray:
+        return np.array([np.interp(s, arc, path[:, 0]), np.interp(s, arc, path[:, 1])])
+
+    s0 = float(s_t[0])
+    pos = at(s0)
+    d = at(s0 + 0.5) - at(max(s0 - 0.5, 0.0))
+    course = float(np.arctan2(d[1], d[0]))
+    idx = int(round(s0 / ds))
+    out = np.empty((len(s_t), 2))
+    out[0] = pos
+    for k in range(1, len(s_t)):
+        v = max((s_t[k] - s_t[k - 1]) / dt_s, 0.0)
+        look = max(4.0, 0.9 * v)
+        tgt = at(idx * ds + look)
+        rel = tgt - pos
+        alpha = np.arctan2(np.sin(np.arctan2(rel[1], rel[0]) - course),
+                           np.cos(np.arctan2(rel[1], rel[0]) - course))
+        kappa = 2.0 * np.sin(alpha) / max(float(np.hypot(*rel)), 1.0)
+        new_course = course + v * kappa * dt_s
+        mid = 0.5 * (course + new_course)
+        pos = pos + v * dt_s * np.array([np.cos(mid), np.sin(mid)])
+        course = new_course
+        cand = np.clip(idx + PURSUIT_WINDOW, 0, p - 1)
+        idx = int(cand[np.argmin(((path[cand] - pos) ** 2).sum(1))])
+        out[k] = pos
+    return out
+
+
+def _pursuit_compensated(path: np.ndarray, t_all: np.ndarray, s_all: np.ndarray,
+                         dt_s: float) -> np.ndarray:
+    """A path whose pure pursuit (as the simulator steers) runs along ``path``: the target
+    path is pursued, the lateral error of the pursuing front axle at each arc length is
+    subtracted from the steered path, a few times over."""
+    total = float(_arc(path)[-1])
+    if total < 1.0:
+        return path
+    n = int(np.ceil(total / 0.5)) + 1
+    target, ds = resample_polyline(path, n)
+    d = np.gradient(target, axis=0)
+    normal = np.stack([-d[:, 1], d[:, 0]], 1) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
+    arc = np.arange(n) * ds
+    tk = np.arange(int(round(float(t_all[-1]) / dt_s)) + 1) * dt_s
+    s_t = np.clip(np.interp(tk, t_all, s_all), 0.0, total)
+    steer = target.copy()
+    offset = np.zeros(n)
+    for _ in range(PURSUIT_ITERATIONS):
+        run = _pursue(steer, ds, s_t, dt_s)
+        # the pursuer's signed lateral error to the target path, by arc length
+        s_run = _progress(target, run)
+        i = np.clip(np.round(s_run / ds).astype(np.int64), 0, n - 1)
+        err = ((run - target[i]) * normal[i]).sum(1)
+        order = np.argsort(s_run)
+        e = np.interp(arc, s_run[order], err[order], left=0.0, right=0.0)
+        # only the smooth part: the pursuer rides over the track's noise, which must not be
+        # fed back (it would make the steered path zigzag, longer than the one driven)
+        k = np.ones(2 * PURSUIT_SMOOTH_SAMPLES + 1)
+        offset -= np.convolve(e, k, "same") / np.convolve(np.ones(n), k, "same")
+        steer = target + offset[:, None] * normal
+    return steer
 
 
 def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duration_s: float
@@ -111,45 +212,61 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     Before its first observation the actor is assumed to have driven at its first observed
     speed along the map (backwards through lane predecessors); after its last one it keeps its
     last speed along the map (first successors).
+
+    The simulator steers a vehicle's front axle along its path and lets the body trail, so a
+    vehicle's path is its front axle's: the perceived centre moved ahead along the perceived
+    body heading (the body's off-tracking in turns is then reproduced, not applied twice).
     """
     t0, t1 = float(track.times[0]), float(track.times[-1])
     # entry speed: the smaller of the derivative at the first sighting and the mean over the
-    # first second (a standing pedestrian's noise must not set it walking before it was seen)
+    # first second (a standing pedestrian's noise must not set it walking before it was seen),
+    # that mean taken back to the first sighting along the speed's trend over the second (an
+    # actor first seen while braking was faster then than on average over the second)
     vw, hw = track.velocity_between(t0, t0 + ENDPOINT_WINDOW_S)
+    first = track.times <= t0 + ENDPOINT_WINDOW_S + 1e-9
+    if first.sum() >= 3:
+        trend = float(np.polyfit(track.times[first] - t0, track.speed[first], 1)[0])
+        vw = max(vw - 0.5 * ENDPOINT_WINDOW_S * trend, 0.0)
     v0 = min(float(track.speed[0]), vw)
     h0 = float(track.heading[0]) if track.speed[0] > 1.0 else hw
     v1, h1 = float(track.speed[-1]), float(track.heading[-1])
     v0 = v0 if v0 >= ENTRY_MOVING_MPS else 0.0  # else it stood there before it was seen
-    keep = np.ones(len(track.times), dtype=bool)
-    times, xy = track.times[keep], track.xy[keep]
+    vehicle = track.kind == "vehicle"
+    model = MODEL_CODES.get(track.model, 0)
+    ahead = float(FRONT_AXLE_AHEAD_M[model]) if vehicle else 0.0
+    wheelbase = float(WHEELBASE_M[model]) if vehicle else 0.0
+    body_h = track.heading if track.body_heading is None else track.body_heading
+    times = track.times
+    xy = track.xy + ahead * np.stack([np.cos(body_h), np.sin(body_h)], axis=1)
     core = _thin(xy, WAYPOINT_SPACING_M)
     moving = len(core) >= 2 and not track.stationary
-    back_len = v0 * t0 if moving else 0.0
+    # the start arc length is the centre's: the front axle starts ``ahead`` farther on
+    back_len = v0 * t0 + ahead if moving else 0.0
     fwd_len = v1 * max(duration_s - t1, 0.0) + 5.0
     back = walk_lanes(lanes, core[0], h0, back_len, forward=False)
     if not moving:
-        h = track.heading_at(t0)
-        d = 0.25 * np.array([np.cos(h), np.sin(h)])
-        core = np.vstack([xy[0] - d, xy[0] + d])
+        h = float(body_h[0])
+        d = np.array([np.cos(h), np.sin(h)])
+        # room behind the front axle for the rear axle, so the body starts on the heading
+        core = np.vstack([xy[0] - (0.25 + wheelbase) * d, xy[0] + 0.25 * d])
     fwd = walk_lanes(lanes, core[-1], h1, fwd_len, forward=True) \
         if moving else np.zeros((0, 2))
     path = _thin(np.vstack([back, core, fwd]), 0.05)
     start_core = float(_arc(np.vstack([back, core[:1]]))[-1]) if len(back) else 0.0
-    s_core = start_core + _progress(core, xy) if moving else np.full(len(times), 0.25)
-    tt = [np.array([0.0])] if t0 > 0 else []
-    ss = [np.array([s_core[0] - v0 * t0])] if t0 > 0 else []
-    tt.append(times)
-    ss.append(s_core)
-    if t1 < duration_s:
-        tt.append(np.array([duration_s + 1.0]))
-        ss.append(np.array([s_core[-1] + v1 * (duration_s + 1.0 - t1)]))
-    t_all, s_all = np.concatenate(tt), np.concatenate(ss)
-    start = max(float(s_all[0]), 0.0)
+    s_core = start_core + _progress(core, xy) if moving else np.full(len(times),
+                                                                     0.25 + wheelbase)
+    t_all, s_all, start = _timeline(times, s_core, v0, v1, duration_s, ahead)
+    if vehicle and moving:
+        # the simulator's pure pursuit cuts inside a curved path: steer along a path that
+        # is pushed out by as much, so the front axle runs where it was seen
+        path = _pursuit_compensated(path, t_all, s_all, dt_s)
+        s_core = _progress(path, xy)
+        t_all, s_all, start = _timeline(times, s_core, v0, v1, duration_s, ahead)
     profile = design_profile(t_all, s_all - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
     return Actor(
         id=track.name, kind=track.kind, model=track.model, color=track.color, route=(),
         waypoints=tuple((round(float(x), 4), round(float(y), 4)) for x, y in path),
-        start_s_m=round(start, 4), speed_profile=profile, reactive=False,
+        start_s_m=round(start - ahead, 4), speed_profile=profile, reactive=False,
     )
 
 

@@ -62,6 +62,8 @@ class Track:
         size: (3,) median perceived length, width, height [m].
         notes: what was assumed (unknown colour, class from size, ...).
         stationary: never moved (pose = median of the detections).
+        body_heading: (n,) perceived body heading [rad] (the detected box's orientation; a
+            turning long vehicle's body points inside its velocity), or None (= ``heading``).
     """
 
     track_ids: tuple[int, ...]
@@ -76,6 +78,7 @@ class Track:
     size: np.ndarray
     notes: tuple[str, ...] = ()
     stationary: bool = False
+    body_heading: np.ndarray | None = None
 
     def velocity_between(self, t_a: float, t_b: float) -> tuple[float, float]:
         """(speed [m/s], heading [rad]) of the displacement between two times of the track:
@@ -347,10 +350,18 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = ()) -
             speed = np.hypot(vel[:, 0], vel[:, 1])
             heading = np.where(speed > MOVING_SPEED_MPS, np.arctan2(vel[:, 1], vel[:, 0]),
                                perceived)
+            # the box orientation, its pi ambiguity resolved toward the direction of travel
+            # (a slow vehicle's: its overall displacement)
+            travel = xy[-1] - xy[0]
+            ref = np.where(speed > MOVING_SPEED_MPS, heading, np.arctan2(travel[1], travel[0])
+                           if np.hypot(*travel) > 0.5 else perceived)
+            body = np.where(np.isnan(perceived), ref, perceived)
+            body = np.where(np.cos(body - ref) < 0.0, body + np.pi, body)
         tracks.append(Track(
             track_ids=tuple(p.track_id for p in chain), times=grid, xy=xy,
             heading=wrap(heading), speed=speed, observed=observed, kind=kind, model=model,
-            color=color, size=size, notes=tuple(notes), stationary=stationary))
+            color=color, size=size, notes=tuple(notes), stationary=stationary,
+            body_heading=wrap(heading if stationary else body)))
     return sorted(tracks, key=lambda tr: tr.track_ids[0])
 
 

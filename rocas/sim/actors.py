@@ -1,7 +1,10 @@
 """Actor behaviour: follow a route with a speed profile, optionally keep a distance (IDM).
 
-Vehicles steer with pure pursuit through the friction-limited bicycle (so a truck on a wet
-road drifts wide in a turn); cyclists and pedestrians are points moved along their path.
+Vehicles steer their front axle with pure pursuit through the friction-limited bicycle (so a
+truck on a wet road drifts wide in a turn); the body trails behind it, its rear axle dragged
+toward the front one, so a long vehicle's body cuts inside a turn (off-tracking) and its
+heading lags the path's. On a straight path the body centre is where its arc length says.
+Cyclists and pedestrians are points moved along their path.
 """
 
 from __future__ import annotations
@@ -25,24 +28,54 @@ ACTOR_DECEL_MPS2 = 6.0       # [m/s^2] largest deceleration of actors
 SPEED_GAIN_PER_S = 1.5       # [1/s] speed-tracking gain
 REACTIVE_HEADWAY_S = 1.2     # [s]
 PROJECTION_WINDOW = np.arange(-2, 7)  # samples around the last match (0.5 m apart)
+#: Per vehicle model (sedan, suv, truck, bus): wheelbase [m] and how far the front axle is
+#: ahead of the body centre [m] (half the length minus the front overhang).
+WHEELBASE_M = np.array([2.8, 2.9, 5.0, 6.5])
+FRONT_AXLE_AHEAD_M = np.array([1.45, 1.5, 2.95, 3.4])
+
+
+def axle_geometry(kind: np.ndarray, model: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(front axle ahead of the centre, wheelbase) [m] per actor; 0 for non-vehicles."""
+    is_veh = kind == KIND_VEHICLE
+    m = clip(model, 0, 3)
+    return np.where(is_veh, FRONT_AXLE_AHEAD_M[m], 0.0), np.where(is_veh, WHEELBASE_M[m], 0.0)
+
+
+def trail_body(gx: np.ndarray, gy: np.ndarray, rear_x: np.ndarray, rear_y: np.ndarray,
+               yaw_prev: np.ndarray, ahead: np.ndarray, wheelbase: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body (centre x, y, yaw) of a vehicle whose front axle is at (gx, gy) and whose rear axle
+    was at (rear_x, rear_y): the rear axle is dragged toward the front one (the body turns to
+    point from it to the front axle). Points (wheelbase 0) keep ``yaw_prev``."""
+    dx, dy = gx - rear_x, gy - rear_y
+    yaw = np.where((wheelbase > 0) & (np.hypot(dx, dy) > 1e-6), np.arctan2(dy, dx), yaw_prev)
+    return gx - ahead * np.cos(yaw), gy - ahead * np.sin(yaw), yaw
 
 
 @dataclass(frozen=True, eq=False)
 class ActorState:
-    """Actor states, each (N, A): pose and motion, plus progress ``s`` on the path [m] and
-    the nearest path sample ``index``."""
+    """Actor states, each (N, A): the body (centre pose and motion), the steered point that
+    follows the path (``guide``: a vehicle's front axle, else the body itself), its progress
+    ``s`` on the path [m] and the nearest path sample ``index``."""
 
     body: VehicleState
     s: np.ndarray
     index: np.ndarray
+    guide: VehicleState
 
 
 def initial_actors(world: BatchWorld) -> ActorState:
-    s = world.actor_start_s.copy()
-    x, y, h = path_point(world.actor_path, world.actor_path_heading, world.actor_path_ds, s)
+    ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
+    ahead = np.broadcast_to(ahead, world.actor_start_s.shape)
+    path, ph, ds = world.actor_path, world.actor_path_heading, world.actor_path_ds
+    s = world.actor_start_s + ahead  # the front axle, ahead of the centre's arc length
+    x, y, h = path_point(path, ph, ds, s)
+    rx, ry, _ = path_point(path, ph, ds, s - wb)
+    bx, by, byaw = trail_body(x, y, rx, ry, h, ahead, wb)
     v = profile_speed(0.0, world.actor_profile_t, world.actor_profile_v)
-    idx = np.round(s / np.maximum(world.actor_path_ds, 1e-9)).astype(np.int64)
-    return ActorState(VehicleState(x, y, h, h.copy(), v), s, idx)
+    idx = np.round(s / np.maximum(ds, 1e-9)).astype(np.int64)
+    return ActorState(VehicleState(bx, by, byaw, byaw.copy(), v), s, idx,
+                      VehicleState(x, y, h, h.copy(), v))
 
 
 def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleState,
@@ -50,6 +83,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     """Advance every actor by one step (decide, then integrate)."""
     dt = world.dt_s
     b = state.body
+    fa = state.guide  # the front axle (points: the body)
     n, a = b.x.shape
     if a == 0:
         return state
@@ -81,12 +115,12 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
                      np.maximum(np.minimum(accel, idm), -ACTOR_DECEL_MPS2), accel)
     # vehicles: pure pursuit through the bicycle model
     ds = np.maximum(world.actor_path_ds, 1e-9)
-    look = np.maximum(4.0, 0.9 * b.speed)
+    look = np.maximum(4.0, 0.9 * fa.speed)
     tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds, state.s + look)
-    alpha = wrap_angle(np.arctan2(ty - b.y, tx - b.x) - b.yaw)
-    kappa = 2.0 * np.sin(alpha) / np.maximum(np.hypot(tx - b.x, ty - b.y), 1.0)
+    alpha = wrap_angle(np.arctan2(ty - fa.y, tx - fa.x) - fa.yaw)
+    kappa = 2.0 * np.sin(alpha) / np.maximum(np.hypot(tx - fa.x, ty - fa.y), 1.0)
     grip = LATERAL_GRIP_FACTOR[clip(world.actor_model, 0, 3)]
-    veh, _ = bicycle_step(b, accel, kappa, friction[:, None], grip, dt)
+    veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], grip, dt)
     # project vehicles back on their path (local window)
     p = world.actor_path.shape[2]
     cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, p - 1)
@@ -97,14 +131,25 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
                      axis=-1)
     v_idx = cand[rn[..., 0], ra[..., 0], best]
     # points: move along the path
-    v_pt = np.maximum(b.speed + accel * dt, 0.0)
+    v_pt = np.maximum(fa.speed + accel * dt, 0.0)
     s_pt = state.s + 0.5 * (b.speed + v_pt) * dt
     px2, py2, ph2 = path_point(world.actor_path, world.actor_path_heading, ds, s_pt)
     is_veh = world.actor_kind == KIND_VEHICLE
-    body = VehicleState(
+    guide = VehicleState(
         x=np.where(is_veh, veh.x, px2), y=np.where(is_veh, veh.y, py2),
         yaw=np.where(is_veh, veh.yaw, ph2), course=np.where(is_veh, veh.course, ph2),
         speed=np.where(is_veh, veh.speed, v_pt))
+    # the body trails the front axle (points: the body is the guide)
+    ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
+    # (a vehicle's body ``course`` holds its trailing axis, rear axle -> front axle; its
+    # ``yaw`` adds the front axle's slip, so a sliding vehicle's body points inside its motion)
+    back = wb - ahead
+    rear_x = b.x - back * np.cos(b.course)
+    rear_y = b.y - back * np.sin(b.course)
+    bx, by, byaw = trail_body(guide.x, guide.y, rear_x, rear_y, guide.yaw, ahead, wb)
+    slip = np.where(is_veh, wrap_angle(guide.yaw - guide.course), 0.0)
+    body = VehicleState(x=bx, y=by, yaw=np.where(slip != 0.0, wrap_angle(byaw + slip), byaw),
+                        course=np.where(is_veh, byaw, guide.course), speed=guide.speed)
     s_new = np.where(is_veh, v_idx * ds, s_pt)
     idx = np.where(is_veh, v_idx, np.round(s_pt / ds).astype(np.int64))
-    return ActorState(body, s_new, idx)
+    return ActorState(body, s_new, idx, guide)
