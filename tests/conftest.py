@@ -1,11 +1,19 @@
 import dataclasses
 import io
+import os
 from dataclasses import dataclass
 
 import pytest
+from hypothesis import settings
 
 from rocas.cli.console import Env
 from rocas.cli.main import main
+
+# every property test draws the same examples on every run (CI must not depend on luck); explore
+# new ones locally with HYPOTHESIS_PROFILE=explore pytest --hypothesis-seed=N
+settings.register_profile("ci", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @dataclass

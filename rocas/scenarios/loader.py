@@ -208,8 +208,10 @@ def _light(ctx: _Ctx, d: Any, key: str, lanes: Mapping[str, Lane]) -> TrafficLig
         w = lanes[lane_id].width_m
         pos = (x + 2.0 * math.cos(h) + (w / 2 + 1.0) * math.sin(h),
                y + 2.0 * math.sin(h) - (w / 2 + 1.0) * math.cos(h))
-    facing = (math.radians(_num(ctx, t["facing_deg"], f"{key}.facing_deg", -360.0, 360.0))
-              if "facing_deg" in t else _wrap(h + math.pi))
+    # a derived facing is kept at the precision the file format writes, so that a written
+    # scenario reads back equal
+    facing = math.radians(_num(ctx, t["facing_deg"], f"{key}.facing_deg", -360.0, 360.0)
+                          if "facing_deg" in t else _r(math.degrees(_wrap(h + math.pi))))
     return TrafficLight(
         id=_str(ctx, t["id"], f"{key}.id"), position=pos, facing_rad=facing, stop_lane=lane_id,
         stop_s_m=s, policy=_policy(ctx, t.get("policy", {}), f"{key}.policy"),

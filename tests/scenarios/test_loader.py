@@ -104,3 +104,17 @@ def test_roundabout_is_expressible_and_a9_depends_on_the_brake_threshold():
         assert b in lanes[a].successors  # a closed cycle of lanes
     res = simulate_batch(s, params=[None, {"perception.brake_threshold": 0.99}])
     assert res.outcomes[0].estop and not res.outcomes[1].estop
+
+
+def test_a_derived_light_facing_survives_the_round_trip():
+    # found by the property test: a light without facing_deg faces against its stop lane, and the
+    # written degrees (9 decimals) must read back to the same radians
+    from rocas.scenarios.catalog import entry
+    from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
+
+    e = entry("A10")
+    d = scenario_to_dict(e.scenario)
+    for tl in d["traffic_lights"]:
+        del tl["facing_deg"]
+    s = scenario_from_dict(d)
+    assert scenario_from_dict(scenario_to_dict(s)) == s
