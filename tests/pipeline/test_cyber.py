@@ -39,3 +39,25 @@ def test_sensing_limits_may_only_grow():
     assert SENSING_LIMITS <= set(PARAMETERS) and not SENSING_LIMITS & BRAKING_LIMITS
     lowest = Mutation({"perception.camera_range_m": cam.decode(0.0)})
     assert not space.decode(space.encode(lowest)).values  # narrowing is not in the space
+
+
+def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory():
+    from rocas.pipeline.analyze import _first_fix, _fix_candidates
+    from rocas.search.ga import Candidate, SearchResult
+
+    def cand(values, h1, h2, ok=True):
+        return Candidate(Mutation(values), (h1, h2), -1.0 if ok else 0.5, 1)
+
+    a1 = cand({"planning.a": 1.0}, 0.1, 1.30)
+    a2 = cand({"planning.a": 2.0}, 0.0, 1.20)        # same parameter set as a1, smaller
+    b = cand({"planning.b": 1.0}, 0.2, 1.25)
+    drift = cand({"planning.c": 1.0}, 5.0, 1.01)     # changes the ego's earlier trajectory
+    crash = cand({"planning.d": 1.0}, 0.0, 1.00, ok=False)
+    pair = cand({"planning.a": 1.0, "planning.b": 1.0}, 0.0, 2.4)
+    res = SearchResult(candidates=[crash, drift, a1, b, a2, pair], front=[])
+    assert _fix_candidates(res, 1.0, 3) == [a2, b, pair]
+    assert _fix_candidates(res, 1.0, 1) == [a2]
+    assert _first_fix(res, 1.0) == 3  # the drifting fix does not count
+    # when no fix keeps the trajectory, the one that changes it least is the only candidate
+    far = SearchResult(candidates=[drift, cand({"planning.e": 1.0}, 3.0, 1.5)], front=[])
+    assert [c.mutation.names for c in _fix_candidates(far, 1.0, 3)] == [("planning.e",)]
