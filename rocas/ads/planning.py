@@ -260,9 +260,7 @@ class Planning:
         reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
         amax, bcomf = p["max_accel_mps2"], p["comfort_decel_mps2"]
         a_free = amax * (1.0 - (v0 / np.maximum(v_cruise, 0.1)) ** p["idm_exponent"])
-        headway = np.concatenate([np.broadcast_to(c("follow_time_headway_s"), (n, m)),
-                                  np.broadcast_to(c("yield_time_headway_s"), (n, m)),
-                                  np.broadcast_to(c("follow_time_headway_s"), (n, m + 3))], axis=1)
+        headway = np.where(reasons == R_YIELD, c("yield_time_headway_s"), c("follow_time_headway_s"))
         sstar = smin + np.maximum(0.0, v0[:, None] * headway + v0[:, None]
                                   * (v0[:, None] - leads) / (2.0 * np.sqrt(amax * bcomf))[:, None])
         active = np.isfinite(gaps)
