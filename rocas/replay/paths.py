@@ -16,8 +16,11 @@ from rocas.sim.actors import (
     ACTOR_ACCEL_MPS2,
     ACTOR_DECEL_MPS2,
     FRONT_AXLE_AHEAD_M,
+    PROJECTION_WINDOW,
     SPEED_GAIN_PER_S,
     WHEELBASE_M,
+    pursuit_curvature,
+    pursuit_lookahead,
 )
 from rocas.sim.geometry import resample_polyline
 from rocas.sim.world import MODEL_CODES
@@ -32,7 +35,6 @@ ENTRY_MOVING_MPS = 0.5       # [m/s] slower at its first sighting: it stood ther
 ENDPOINT_WINDOW_S = 1.0      # [s] window of the entry and exit velocity estimates
 PURSUIT_ITERATIONS = 3       # corrections of a vehicle's steered path for pure-pursuit cutting
 PURSUIT_SMOOTH_SAMPLES = 6       # half width of the moving average of the error [samples]
-PURSUIT_WINDOW = np.arange(-2, 7)  # path samples searched around the last match (the sim's)
 
 
 def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -140,7 +142,8 @@ def _timeline(times: np.ndarray, s_core: np.ndarray, v0: float, v1: float, durat
 def _pursue(path: np.ndarray, ds: float, s_t: np.ndarray, dt_s: float) -> np.ndarray:
     """Front-axle positions (T, 2) of the simulator's actor steering along the equally spaced
     ``path`` with its arc length following ``s_t`` (one per tick): the pure pursuit of
-    :func:`rocas.sim.actors.step_actors` with a kinematic (no-slip) body."""
+    :func:`rocas.sim.actors.step_actors` (its look-ahead, steering law and projection window)
+    with a kinematic (no-slip) body."""
     p = len(path)
     arc = np.arange(p) * ds
 
@@ -156,17 +159,13 @@ def _pursue(path: np.ndarray, ds: float, s_t: np.ndarray, dt_s: float) -> np.nda
     out[0] = pos
     for k in range(1, len(s_t)):
         v = max((s_t[k] - s_t[k - 1]) / dt_s, 0.0)
-        look = max(4.0, 0.9 * v)
-        tgt = at(idx * ds + look)
-        rel = tgt - pos
-        alpha = np.arctan2(np.sin(np.arctan2(rel[1], rel[0]) - course),
-                           np.cos(np.arctan2(rel[1], rel[0]) - course))
-        kappa = 2.0 * np.sin(alpha) / max(float(np.hypot(*rel)), 1.0)
+        tgt = at(idx * ds + float(pursuit_lookahead(v)))
+        kappa = float(pursuit_curvature(pos[0], pos[1], course, tgt[0], tgt[1]))
         new_course = course + v * kappa * dt_s
         mid = 0.5 * (course + new_course)
         pos = pos + v * dt_s * np.array([np.cos(mid), np.sin(mid)])
         course = new_course
-        cand = np.clip(idx + PURSUIT_WINDOW, 0, p - 1)
+        cand = np.clip(idx + PROJECTION_WINDOW, 0, p - 1)
         idx = int(cand[np.argmin(((path[cand] - pos) ** 2).sum(1))])
         out[k] = pos
     return out

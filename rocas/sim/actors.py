@@ -28,6 +28,8 @@ ACTOR_DECEL_MPS2 = 6.0       # [m/s^2] largest deceleration of actors
 SPEED_GAIN_PER_S = 1.5       # [1/s] speed-tracking gain
 REACTIVE_HEADWAY_S = 1.2     # [s]
 PROJECTION_WINDOW = np.arange(-2, 7)  # samples around the last match (0.5 m apart)
+PURSUIT_MIN_LOOKAHEAD_M = 4.0  # [m] shortest pure-pursuit look-ahead of actors
+PURSUIT_LOOKAHEAD_S = 0.9      # [s] look-ahead per unit of speed
 #: Per vehicle model (sedan, suv, truck, bus): wheelbase [m] and how far the front axle is
 #: ahead of the body centre [m] (half the length minus the front overhang).
 WHEELBASE_M = np.array([2.8, 2.9, 5.0, 6.5])
@@ -50,6 +52,19 @@ def trail_body(gx: np.ndarray, gy: np.ndarray, rear_x: np.ndarray, rear_y: np.nd
     dx, dy = gx - rear_x, gy - rear_y
     yaw = np.where((wheelbase > 0) & (np.hypot(dx, dy) > 1e-6), np.arctan2(dy, dx), yaw_prev)
     return gx - ahead * np.cos(yaw), gy - ahead * np.sin(yaw), yaw
+
+
+def pursuit_lookahead(speed: np.ndarray) -> np.ndarray:
+    """Look-ahead distance [m] of an actor's pure pursuit at ``speed`` [m/s] (any shape)."""
+    return np.maximum(PURSUIT_MIN_LOOKAHEAD_M, PURSUIT_LOOKAHEAD_S * speed)
+
+
+def pursuit_curvature(x: np.ndarray, y: np.ndarray, yaw: np.ndarray, tx: np.ndarray,
+                      ty: np.ndarray) -> np.ndarray:
+    """Curvature [1/m] pure pursuit steers from pose (x, y, yaw) towards target (tx, ty)
+    (any matching shapes)."""
+    alpha = wrap_angle(np.arctan2(ty - y, tx - x) - yaw)
+    return 2.0 * np.sin(alpha) / np.maximum(np.hypot(tx - x, ty - y), 1.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,10 +130,9 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
                      np.maximum(np.minimum(accel, idm), -ACTOR_DECEL_MPS2), accel)
     # vehicles: pure pursuit through the bicycle model
     ds = np.maximum(world.actor_path_ds, 1e-9)
-    look = np.maximum(4.0, 0.9 * fa.speed)
-    tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds, state.s + look)
-    alpha = wrap_angle(np.arctan2(ty - fa.y, tx - fa.x) - fa.yaw)
-    kappa = 2.0 * np.sin(alpha) / np.maximum(np.hypot(tx - fa.x, ty - fa.y), 1.0)
+    tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds,
+                           state.s + pursuit_lookahead(fa.speed))
+    kappa = pursuit_curvature(fa.x, fa.y, fa.yaw, tx, ty)
     grip = LATERAL_GRIP_FACTOR[clip(world.actor_model, 0, 3)]
     veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], grip, dt)
     # project vehicles back on their path (local window)
