@@ -649,6 +649,12 @@ def _time(times: Any) -> Any:
     return [rr.TimeColumn(TIMELINE, duration=np.asarray(times, dtype=np.float64))]
 
 
+def _over_time(rec: Any, path: str, static: Any, times: Any, columns: Any) -> None:
+    """Log ``static`` (the fields that never change) once and ``columns`` (one row per time)."""
+    rec.log(path, static, static=True)
+    rec.send_columns(path, indexes=_time(times), columns=columns)
+
+
 def log_world(
     rec: Any,
     world: dict[str, Any],
@@ -764,18 +770,10 @@ def _log_lights(
     n = len(lights)
     colors = [LIGHT_RGB.get(c, LIGHT_RGB["off"]) for s in states for c in s]
     labels = [f"{tl['id']}: {c}" for s in states for tl, c in zip(lights, s, strict=True)]
-    rec.log(f"{w}/stop_lines", rr.LineStrips2D(lines, radii=0.3, draw_order=3.0), static=True)
-    rec.send_columns(
-        f"{w}/stop_lines",
-        indexes=_time(times),
-        columns=rr.LineStrips2D.columns(colors=colors).partition([n] * len(times)),
-    )
-    rec.log(f"{w}/traffic_lights", rr.Points2D(heads, radii=0.9, draw_order=9.5), static=True)
-    rec.send_columns(
-        f"{w}/traffic_lights",
-        indexes=_time(times),
-        columns=rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)),
-    )
+    _over_time(rec, f"{w}/stop_lines", rr.LineStrips2D(lines, radii=0.3, draw_order=3.0), times,
+               rr.LineStrips2D.columns(colors=colors).partition([n] * len(times)))
+    _over_time(rec, f"{w}/traffic_lights", rr.Points2D(heads, radii=0.9, draw_order=9.5), times,
+               rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)))
 
 
 def _log_world_highlight(
@@ -913,27 +911,17 @@ def _log_ego(rec: Any, ex: Execution, prefix: str) -> None:
     if n == 0:
         return
     size = np.tile([EGO_LENGTH_M, EGO_WIDTH_M], (n, 1))
-    rec.log(
-        f"{prefix}/ego/box",
+    _over_time(
+        rec, f"{prefix}/ego/box",
         rr.LineStrips2D.from_fields(
             radii=0.12, colors=[(255, 255, 255)], labels=["ego"], show_labels=True, draw_order=11.0
         ),
-        static=True,
+        ex.ego_t, rr.LineStrips2D.columns(strips=list(box_outline(ex.ego_xy, ex.ego_heading, size))),
     )
-    rec.send_columns(
-        f"{prefix}/ego/box",
-        indexes=_time(ex.ego_t),
-        columns=rr.LineStrips2D.columns(strips=list(box_outline(ex.ego_xy, ex.ego_heading, size))),
-    )
-    rec.log(
-        f"{prefix}/ego/body",
+    _over_time(
+        rec, f"{prefix}/ego/body",
         rr.LineStrips2D.from_fields(radii=EGO_WIDTH_M / 2 - 0.1, colors=[EGO_COLOR], draw_order=10.5),
-        static=True,
-    )
-    rec.send_columns(
-        f"{prefix}/ego/body",
-        indexes=_time(ex.ego_t),
-        columns=rr.LineStrips2D.columns(strips=list(_body_line(ex.ego_xy, ex.ego_heading, size))),
+        ex.ego_t, rr.LineStrips2D.columns(strips=list(_body_line(ex.ego_xy, ex.ego_heading, size))),
     )
     # trail at TRAIL_STEP_S: one row per 0.1 s of poses
     step = max(1, round(TRAIL_STEP_S / max(float(np.median(np.diff(ex.ego_t))) if n > 1 else 1.0, 1e-6)))
@@ -944,14 +932,10 @@ def _log_ego(rec: Any, ex: Execution, prefix: str) -> None:
         pos.append(p)
         col.append(_trail_colors(EGO_COLOR, ages))
         counts.append(len(p))
-    rec.log(f"{prefix}/ego/trail", rr.Points2D.from_fields(radii=0.35, draw_order=5.0), static=True)
-    rec.send_columns(
-        f"{prefix}/ego/trail",
-        indexes=_time(ex.ego_t[rows]),
-        columns=rr.Points2D.columns(positions=np.concatenate(pos), colors=np.concatenate(col)).partition(
-            counts
-        ),
-    )
+    _over_time(rec, f"{prefix}/ego/trail", rr.Points2D.from_fields(radii=0.35, draw_order=5.0),
+               ex.ego_t[rows],
+               rr.Points2D.columns(positions=np.concatenate(pos), colors=np.concatenate(col))
+               .partition(counts))
 
 
 def _log_actors(
@@ -977,26 +961,17 @@ def _log_actors(
         for i, k in zip(f.ids, f.kinds, strict=True)
     ]
     outline = [_contrast(c) for c in fill]
-    rec.log(
-        f"{prefix}/actors/boxes",
-        rr.LineStrips2D.from_fields(radii=0.1, show_labels=True, draw_order=9.1),
-        static=True,
-    )
-    rec.send_columns(
-        f"{prefix}/actors/boxes",
-        indexes=_time(times),
-        columns=rr.LineStrips2D.columns(
-            strips=list(box_outline(xy, heading, size)), colors=outline, labels=labels
-        ).partition(counts),
+    _over_time(
+        rec, f"{prefix}/actors/boxes",
+        rr.LineStrips2D.from_fields(radii=0.1, show_labels=True, draw_order=9.1), times,
+        rr.LineStrips2D.columns(strips=list(box_outline(xy, heading, size)), colors=outline,
+                                labels=labels).partition(counts),
     )
     radii = np.maximum(size[:, 1] / 2 - 0.08, 0.1)
-    rec.log(f"{prefix}/actors/bodies", rr.LineStrips2D.from_fields(draw_order=9.0), static=True)
-    rec.send_columns(
-        f"{prefix}/actors/bodies",
-        indexes=_time(times),
-        columns=rr.LineStrips2D.columns(
-            strips=list(_body_line(xy, heading, size)), colors=fill, radii=radii
-        ).partition(counts),
+    _over_time(
+        rec, f"{prefix}/actors/bodies", rr.LineStrips2D.from_fields(draw_order=9.0), times,
+        rr.LineStrips2D.columns(strips=list(_body_line(xy, heading, size)), colors=fill,
+                                radii=radii).partition(counts),
     )
     # fading trails per track
     tracks: dict[str, tuple[list[float], list[np.ndarray]]] = {}
@@ -1017,14 +992,9 @@ def _log_actors(
             c += len(p)
         tcounts.append(c)
     if sum(tcounts):
-        rec.log(f"{prefix}/actors/trails", rr.Points2D.from_fields(radii=0.3, draw_order=5.1), static=True)
-        rec.send_columns(
-            f"{prefix}/actors/trails",
-            indexes=_time(times),
-            columns=rr.Points2D.columns(positions=np.concatenate(pos), colors=np.concatenate(col)).partition(
-                tcounts
-            ),
-        )
+        _over_time(rec, f"{prefix}/actors/trails", rr.Points2D.from_fields(radii=0.3, draw_order=5.1),
+                   times, rr.Points2D.columns(positions=np.concatenate(pos), colors=np.concatenate(col))
+                   .partition(tcounts))
     if highlight:
         hi = [i in names and names[i] in highlight for i in ids]
         hcounts, start = [], 0
@@ -1033,17 +1003,13 @@ def _log_actors(
             start += n
         if sum(hcounts):
             mask = np.asarray(hi)
-            rec.log(
-                f"{prefix}/actors/highlight",
+            _over_time(
+                rec, f"{prefix}/actors/highlight",
                 rr.LineStrips2D.from_fields(
                     radii=0.35, colors=[HIGHLIGHT_COLOR], show_labels=True, draw_order=9.2
                 ),
-                static=True,
-            )
-            rec.send_columns(
-                f"{prefix}/actors/highlight",
-                indexes=_time(times),
-                columns=rr.LineStrips2D.columns(
+                times,
+                rr.LineStrips2D.columns(
                     strips=list(box_outline(xy[mask], heading[mask], size[mask] + 1.2)),
                     labels=[f"mutated: {names[i]}" for i, h in zip(ids, hi, strict=True) if h],
                 ).partition(hcounts),
@@ -1054,15 +1020,10 @@ def _log_paths(rec: Any, ex: Execution, prefix: str, names: dict[str, str]) -> N
     import rerun as rr
 
     if ex.plans:
-        rec.log(
-            f"{prefix}/ego/plan",
+        _over_time(
+            rec, f"{prefix}/ego/plan",
             rr.LineStrips2D.from_fields(radii=0.25, colors=[(*EGO_COLOR, 170)], draw_order=7.0),
-            static=True,
-        )
-        rec.send_columns(
-            f"{prefix}/ego/plan",
-            indexes=_time([p[0] for p in ex.plans]),
-            columns=rr.LineStrips2D.columns(strips=[p[1] for p in ex.plans]),
+            [p[0] for p in ex.plans], rr.LineStrips2D.columns(strips=[p[1] for p in ex.plans]),
         )
     if ex.predictions:
         color_of: dict[str, tuple[int, ...]] = {}
@@ -1075,15 +1036,10 @@ def _log_paths(rec: Any, ex: Execution, prefix: str, names: dict[str, str]) -> N
             colors += [(*color_of.get(o, _id_color(o))[:3], 150) for o in owners]
             counts.append(len(lines))
         if sum(counts):
-            rec.log(
-                f"{prefix}/actors/predictions",
-                rr.LineStrips2D.from_fields(radii=0.15, draw_order=6.0),
-                static=True,
-            )
-            rec.send_columns(
-                f"{prefix}/actors/predictions",
-                indexes=_time([p[0] for p in ex.predictions]),
-                columns=rr.LineStrips2D.columns(strips=strips, colors=colors).partition(counts),
+            _over_time(
+                rec, f"{prefix}/actors/predictions", rr.LineStrips2D.from_fields(radii=0.15, draw_order=6.0),
+                [p[0] for p in ex.predictions],
+                rr.LineStrips2D.columns(strips=strips, colors=colors).partition(counts),
             )
 
 
