@@ -1,16 +1,9 @@
 import json
 
-import pytest
 
-
-@pytest.fixture(scope="module")
-def roundabout(red_truck_recording):
-    return red_truck_recording
-
-
-def test_replay_json(rocas, roundabout, tmp_path):
+def test_replay_json(rocas, red_truck_recording, tmp_path):
     out = tmp_path / "replay.mcap"
-    r = rocas("replay", roundabout, "-o", out, "--json")
+    r = rocas("replay", red_truck_recording, "-o", out, "--json")
     assert r.code == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["reproduced"] is True
@@ -20,30 +13,30 @@ def test_replay_json(rocas, roundabout, tmp_path):
     assert "outcome" in d and out.exists()
 
 
-def test_replay_text_and_what_if(rocas, roundabout):
-    r = rocas("replay", roundabout)
+def test_replay_text_and_what_if(rocas, red_truck_recording):
+    r = rocas("replay", red_truck_recording)
     assert r.code == 0 and "reproduced" in r.stdout and "RMSE" in r.stdout
-    r = rocas("replay", roundabout, "--set", "perception.brake_threshold=0.99", "--json")
+    r = rocas("replay", red_truck_recording, "--set", "perception.brake_threshold=0.99", "--json")
     assert r.code == 0, r.stderr          # a what-if that avoids the accident is not a failure
     d = json.loads(r.stdout)
     assert d["reproduced"] is False and d["accident"] is None
     assert d["params"] == {"perception.brake_threshold": 0.99}
 
 
-def test_replay_errors(rocas, tmp_path, roundabout):
+def test_replay_errors(rocas, tmp_path, red_truck_recording):
     r = rocas("replay", tmp_path / "missing.mcap")
     assert r.code == 3 and "no such file" in r.stderr
-    r = rocas("replay", roundabout, "--set", "perception.nope=1")
+    r = rocas("replay", red_truck_recording, "--set", "perception.nope=1")
     assert r.code == 3 and "perception.nope" in r.stderr
-    r = rocas("replay", roundabout, "-o", tmp_path / "x.txt")
+    r = rocas("replay", red_truck_recording, "-o", tmp_path / "x.txt")
     assert r.code == 2
 
 
-def test_not_reproduced_exits_4_after_the_report(rocas, roundabout, monkeypatch):
+def test_not_reproduced_exits_4_after_the_report(rocas, red_truck_recording, monkeypatch):
     import rocas.replay.run as run_mod
 
     monkeypatch.setattr(run_mod, "same_accident", lambda a, b: False)
-    r = rocas("replay", roundabout, "--json")
+    r = rocas("replay", red_truck_recording, "--json")
     assert r.code == 4
     assert json.loads(r.stdout)["reproduced"] is False      # the report is still printed
     assert "did not reproduce" in r.stderr

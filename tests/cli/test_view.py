@@ -6,14 +6,9 @@ from rrd import read_rrd
 from rocas.cli.view import has_display
 
 
-@pytest.fixture(scope="module")
-def recording(red_truck_recording):
-    return red_truck_recording
-
-
-def test_view_writes_the_rrd_of_a_recording(rocas, recording, tmp_path):
+def test_view_writes_the_rrd_of_a_recording(rocas, red_truck_recording, tmp_path):
     out = tmp_path / "v.rrd"
-    res = rocas("view", recording, "--rrd", out, "--no-viewer")
+    res = rocas("view", red_truck_recording, "--rrd", out, "--no-viewer")
     assert res.code == 0, res.stderr
     assert "Rerun recording" in res.stdout and "pose from /localization/pose" in res.stdout
     e, blueprints = read_rrd(out)
@@ -21,10 +16,10 @@ def test_view_writes_the_rrd_of_a_recording(rocas, recording, tmp_path):
     assert "/executions/accident/channels/canbus.chassis" in e
 
 
-def test_view_of_a_run_dir(rocas, recording, tmp_path):
+def test_view_of_a_run_dir(rocas, red_truck_recording, tmp_path):
     run = tmp_path / "run"
     run.mkdir()
-    (run / "accident.mcap").write_bytes(recording.read_bytes())
+    (run / "accident.mcap").write_bytes(red_truck_recording.read_bytes())
     (run / "report.md").write_text("# verdict\n")
     out = tmp_path / "run.rrd"
     res = rocas("view", run, "--rrd", out, "--no-viewer")
