@@ -391,18 +391,24 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         # (set, then magnitudes) and the smallest shrunk fix wins
         shrunk = []
         run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
+        # every shrink trial is scored once: candidates often shrink through the same mutations,
+        # and the search has already scored many of them
+        scored = {c.mutation: (c.objectives, c.constraint) for c in res.candidates}
         for cand in candidates:
             limit = max(run.cfg.h1_limit_m2, cand.objectives[0])
 
             def holds(ms: list[Mutation], limit: float = limit) -> list[bool]:
-                return [not is_accident(r.outcome)
-                        and ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon) <= limit
-                        for r in run_fixes(ms)]
+                todo = list(dict.fromkeys(m for m in ms if m not in scored))
+                if todo:
+                    scored.update(zip(todo, batch(todo), strict=True))
+                return [scored[m][1] <= 0.0 and scored[m][0][0] <= limit for m in ms]
 
-            small, n1 = shrink_set(cand.mutation, holds)
-            small, n2 = shrink_magnitudes(small, space, holds)
-            evaluations += n1 + n2
-            shrunk.append((space.distance(small), small.names, small, cand, n1 + n2))
+            before = len(scored)
+            small, _ = shrink_set(cand.mutation, holds)
+            small, _ = shrink_magnitudes(small, space, holds)
+            simulated = len(scored) - before
+            evaluations += simulated
+            shrunk.append((space.distance(small), small.names, small, cand, simulated))
         _, _, small, chosen, _ = min(shrunk, key=lambda x: (x[0], x[1]))
         result["search_best"] = _cand_json(chosen)
         result["minimise_evaluations"] = sum(x[4] for x in shrunk)
