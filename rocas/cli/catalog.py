@@ -50,7 +50,8 @@ def _truth_json(e) -> dict:  # noqa: ANN001
             "consequence": t.consequence, "collision_with": t.collision_with,
             "situation": t.situation, "module": t.module, "trigger_entity": t.trigger_entity,
             "trigger_property": t.trigger_property, "reference": dict(t.reference),
-            "parameters": list(t.parameters), "fix": dict(t.fix), "fixable": t.fixable,
+            "parameters": list(t.parameters), "fix": dict(t.fix),
+            "alternatives": [dict(a) for a in t.alternatives], "fixable": t.fixable,
             "no_fix_reason": t.no_fix_reason, "override": t.override,
             "diff_module": t.diff_module, "diff_change_s": t.diff_change_s,
             "duration_s": e.scenario.duration_s}
@@ -68,7 +69,14 @@ def _list(args: argparse.Namespace, env: Env) -> int:
         table.add_column(col)
     for e in items:
         t = e.truth
-        fix = ", ".join(f"{v:g}" for v in t.fix.values()) if t.fixable else "none exists"
+        # one line per parameter, in the order of the parameter column; an alternative's
+        # value reads "or v"
+        lines = []
+        for name in t.parameters:
+            alt = [a[name] for a in t.alternatives if name in a]
+            lines.append(f"{t.fix[name]:g}" if name in t.fix
+                         else f"or {alt[0]:g}" if alt else "")
+        fix = "\n".join(lines) if t.fixable else "none exists"
         table.add_row(t.id, t.title, t.module, "\n".join(t.parameters), fix,
                       t.consequence + (f" ({t.collision_with})" if t.collision_with else ""))
     env.out().print(table)

@@ -19,6 +19,6 @@ def test_the_shipped_recording_replays_and_reproduces(type_id):
     assert report.reproduced, report.to_dict()
     assert report.accident.kind == e.truth.consequence
     assert report.ego_rmse_m < 0.5
-    if e.truth.fixable:
-        what_if = replay(RECORDINGS / f"{e.key}.mcap", dict(e.truth.fix))
-        assert what_if.accident is None, what_if.to_dict()
+    for fix in e.truth.fixes:
+        what_if = replay(RECORDINGS / f"{e.key}.mcap", dict(fix))
+        assert what_if.accident is None, (fix, what_if.to_dict())

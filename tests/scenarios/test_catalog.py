@@ -39,14 +39,12 @@ def _clean(o) -> bool:  # noqa: ANN001
 
 @pytest.fixture(scope="module")
 def runs():
-    """Per entry, one batch: defaults, the documented fix (fixable entries), the reference."""
+    """Per entry, one batch: defaults, the reference, then each documented fix (the main one
+    and its alternatives)."""
     out = {}
     for e in ENTRIES:
-        scs = [e.scenario, e.reference_scenario]
-        params = [None, None]
-        if e.truth.fixable:
-            scs.append(e.scenario)
-            params.append(dict(e.truth.fix))
+        scs = [e.scenario, e.reference_scenario] + [e.scenario] * len(e.truth.fixes)
+        params = [None, None] + [dict(f) for f in e.truth.fixes]
         out[e.id] = simulate_batch(scs, params=params)
     return out
 
@@ -74,13 +72,17 @@ def test_mutating_the_trigger_avoids_the_accident(runs, type_id):
     assert _clean(o), o.summary()
 
 
-@pytest.mark.parametrize("type_id", [e.id for e in ENTRIES if e.truth.fixable])
-def test_the_documented_fix_avoids_the_accident_and_keeps_the_trajectory(runs, type_id):
+FIXES = [(e.id, i) for e in ENTRIES for i in range(len(e.truth.fixes))]
+
+
+@pytest.mark.parametrize(("type_id", "which"), FIXES)
+def test_the_documented_fix_avoids_the_accident_and_keeps_the_trajectory(runs, type_id, which):
     res = runs[type_id]
-    o = res.outcomes[2]
-    assert _clean(o), o.summary()
+    o = res.outcomes[2 + which]
+    assert _clean(o), (entry(type_id).truth.fixes[which], o.summary())
     t_acc = accident_time(res.outcomes[0])
-    rmse = trajectory_rmse(res.ego[0], res.ego[2], res.times, t_acc - PRE_ACCIDENT_MARGIN_S)
+    rmse = trajectory_rmse(res.ego[0], res.ego[2 + which], res.times,
+                           t_acc - PRE_ACCIDENT_MARGIN_S)
     assert rmse < PRE_ACCIDENT_RMSE_M
 
 
@@ -136,3 +138,32 @@ def test_instances_are_seeded_crashing_variants_that_round_trip_as_toml():
     assert a.instances[0][1] != e.scenario
     back = scenario_from_dict(tomllib.loads(scenario_toml(a.instances[0][1])))
     assert back == a.instances[0][1]
+
+
+def _truth_doc(**changes):  # noqa: ANN003, ANN202
+    import tomllib
+    from importlib import resources
+
+    text = resources.files("rocas.scenarios.catalog").joinpath(f"{entry('A5').key}.toml")
+    return {**tomllib.loads(text.read_text())["ground_truth"], **changes}
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"alternatives": [{"planning.yield_distance_m": 1.0}]}, "not listed in parameters"),
+    ({"alternatives": [{}]}, "non-empty tables"),
+    ({"alternatives": {"planning.min_overtake_distance_m": 0.5}}, "list of non-empty tables"),
+    ({"fix": {}, "fixable": False}, "unfixable entry has no alternative"),
+])
+def test_alternative_fixes_are_validated(changes, message):
+    from rocas.errors import ScenarioError
+    from rocas.scenarios.catalog import _truth
+
+    with pytest.raises(ScenarioError, match=message):
+        _truth(_truth_doc(**changes), "a05.toml")
+
+
+def test_alternatives_name_documented_parameters_and_follow_the_fix():
+    t = entry("A5").truth
+    assert t.fixes[0] == t.fix and len(t.fixes) == 1 + len(t.alternatives)
+    assert all(set(a) <= set(t.parameters) for a in t.alternatives)
+    assert entry("A7").truth.fixes == ()

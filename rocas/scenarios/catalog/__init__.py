@@ -43,7 +43,7 @@ _ENTITY_KEYS = {"actor": "actors", "object": "objects", "area": "areas",
                 "traffic_light": "traffic_lights"}
 _TRUTH_KEYS = {"id", "title", "paper", "consequence", "collision_with", "situation", "module",
                "trigger_entity", "trigger_property", "reference", "parameters", "fix",
-               "fix_note", "fixable", "no_fix_reason", "override", "diff_module",
+               "alternatives", "fix_note", "fixable", "no_fix_reason", "override", "diff_module",
                "diff_change_s", "diff_note", "jitter"}
 
 
@@ -64,6 +64,9 @@ class GroundTruth:
             (or ``object``/``area``/``traffic_light``) in the scenario file's terms.
         parameters: the responsible module's parameter(s) (``module.name``).
         fix: parameter values that avoid the accident ({} when none exists).
+        alternatives: other fixes of the same misconfiguration, each through other
+            parameters of ``parameters`` (e.g. the two terms of one decision margin); each
+            alone avoids the accident and keeps the ego's earlier trajectory, like ``fix``.
         fixable: whether a configuration fix exists.
         no_fix_reason: why not (unfixable entries).
         override: scenario-specific ADS overrides and why ("" when the defaults are used).
@@ -84,6 +87,7 @@ class GroundTruth:
     reference: Mapping[str, Any]
     parameters: tuple[str, ...]
     fix: Mapping[str, float]
+    alternatives: tuple[Mapping[str, float], ...]
     fix_note: str
     fixable: bool
     no_fix_reason: str
@@ -92,6 +96,11 @@ class GroundTruth:
     diff_change_s: float | None
     diff_note: str
     jitter: Mapping[str, Any]
+
+    @property
+    def fixes(self) -> tuple[Mapping[str, float], ...]:
+        """Every documented fix: ``fix`` first, then the alternatives (empty when unfixable)."""
+        return (self.fix, *self.alternatives) if self.fixable else ()
 
 
 @dataclass(frozen=True)
@@ -140,6 +149,16 @@ def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
     fixable = bool(data.get("fixable", True))
     if fixable != bool(data.get("fix")):
         raise _fail(source, "fix", "a fixable entry needs fix values, an unfixable one none")
+    alternatives = data.get("alternatives", [])
+    if not isinstance(alternatives, list) or not all(
+            isinstance(a, dict) and a for a in alternatives):
+        raise _fail(source, "alternatives", "expected a list of non-empty tables")
+    for alt in alternatives:
+        for name in alt:
+            if name not in data["parameters"]:
+                raise _fail(source, "alternatives", f"{name} is not listed in parameters")
+    if alternatives and not fixable:
+        raise _fail(source, "alternatives", "an unfixable entry has no alternative fixes")
     return GroundTruth(
         id=data["id"], title=data["title"], paper=data.get("paper", ""),
         consequence=data["consequence"], collision_with=data.get("collision_with"),
@@ -147,6 +166,7 @@ def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
         trigger_entity=data["trigger_entity"], trigger_property=data["trigger_property"],
         reference=dict(data["reference"]), parameters=tuple(data["parameters"]),
         fix={k: float(v) for k, v in data.get("fix", {}).items()},
+        alternatives=tuple({k: float(v) for k, v in a.items()} for a in alternatives),
         fix_note=data.get("fix_note", ""), fixable=fixable,
         no_fix_reason=data.get("no_fix_reason", ""), override=data.get("override", ""),
         diff_module=data["diff_module"], diff_change_s=data.get("diff_change_s"),
