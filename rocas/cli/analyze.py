@@ -90,32 +90,52 @@ def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
 
 
 class _Progress:
-    """A rich progress bar per phase on stderr."""
+    """A rich progress bar per phase on stderr. A phase is finished (its bar filled, its clock
+    stopped, its count shown as simulations run) when the next one starts or the run ends."""
 
     def __init__(self, env: Env, totals: dict[str, int]) -> None:
         self._totals = totals
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-        self._p = Progress(TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(),
-                           TextColumn("{task.fields[info]}"), TimeElapsedColumn(), console=env.err(),
-                           transient=False)
+        self._p = Progress(TextColumn("{task.description:<12}"), BarColumn(),
+                           TextColumn("{task.fields[count]:>9}"), TextColumn("{task.fields[info]}"),
+                           TimeElapsedColumn(), console=env.err(), transient=False)
         self._tasks: dict[str, Any] = {}
+        self._done: dict[str, int] = {}  # phase -> simulations counted so far
 
     def __enter__(self) -> _Progress:
         self._p.__enter__()
         return self
 
     def __exit__(self, *exc: Any) -> None:
+        if exc[0] is None:
+            self._finish_all()
         self._p.__exit__(*exc)
+
+    def _finish_all(self) -> None:
+        for phase, task in self._tasks.items():
+            if self._p.tasks[task].finished:
+                continue
+            n = self._done.get(phase)
+            self._p.update(task, total=max(n or 1, 1), completed=max(n or 1, 1),
+                           count=f"{n} sims" if n else "done")
+            self._p.stop_task(task)
 
     def __call__(self, phase: str, info: dict[str, Any]) -> None:
         if phase not in self._tasks:
-            self._tasks[phase] = self._p.add_task(phase, total=self._totals.get(phase), info="")
+            self._finish_all()
+            total = self._totals.get(phase)
+            self._tasks[phase] = self._p.add_task(
+                phase, total=total, info="", count=f"0/{total}" if total else "")
         task = self._tasks[phase]
         if "generation" in info:
-            self._p.update(task, completed=info["evaluations"],
+            n = info["evaluations"]
+            self._done[phase] = n
+            self._p.update(task, completed=n, count=f"{n}/{self._totals.get(phase, '?')}",
                            info=f"gen {info['generation']}, feasible {info['feasible']}")
         else:
+            if phase == "validation" and "variants" in info:
+                self._done[phase] = 2 * info["variants"]
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 
@@ -144,6 +164,10 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
     for m in report["misconfiguration"]:
         t.add_row("misconfiguration", f"{m['parameter']} {_fmt(m['original'])} -> {_fmt(m['mutated'])}")
+    for alt in report.get("alternatives", []):
+        t.add_row("nearly as small", ", ".join(
+            f"{m['parameter']} {_fmt(m['original'])} -> {_fmt(m['mutated'])}"
+            for m in alt["misconfiguration"]) + f"  (h2 {alt['h2']:.4g})")
     v = report["validation"]
     if v and v["variants"]:
         orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]

@@ -240,6 +240,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
 
     if run.done("physical"):
         return run.state["done"]["physical"]
+    run.progress("physical", {})
     t0 = time.perf_counter()
     scn, orig, tick = run.scenario, run.original, run.accident_tick
     assert scn is not None and orig is not None
@@ -359,6 +360,7 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
 
     if run.done("cyber"):
         return run.state["done"]["cyber"]
+    run.progress("cyber", {})
     t0 = time.perf_counter()
     scn, orig = run.scenario, run.original
     assert scn is not None and orig is not None
@@ -409,21 +411,49 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
             simulated = len(scored) - before
             evaluations += simulated
             shrunk.append((space.distance(small), small.names, small, cand, simulated))
-        _, _, small, chosen, _ = min(shrunk, key=lambda x: (x[0], x[1]))
+        (_, small), near = _smallest_fix([(d, m) for d, _, m, _, _ in shrunk])
+        chosen = next(c for _, _, m, c, _ in shrunk if m is small)
         result["search_best"] = _cand_json(chosen)
         result["minimise_evaluations"] = sum(x[4] for x in shrunk)
         result["shrunk_candidates"] = [
             {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
              "h2": round(d, 6)} for d, _, m, c, _ in shrunk]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
-        result["misconfiguration"] = [
-            {"module": n.split(".", 1)[0], "parameter": n, "original": space.variable(n).original,
-             "mutated": small.values[n]} for n in small.names]
+
+        def described(m: Mutation) -> list[dict[str, Any]]:
+            return [{"module": n.split(".", 1)[0], "parameter": n,
+                     "original": space.variable(n).original, "mutated": m.values[n]}
+                    for n in m.names]
+
+        result["misconfiguration"] = described(small)
+        result["alternatives"] = [{"h2": round(d, 6), "misconfiguration": described(m)}
+                                  for d, m in near]
         simulate(scn, params=result["fix"], output=run.out / "fixed.mcap")
     write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=_jsonable))
     run.finish("cyber", result, time.perf_counter() - t0, evaluations)
     (run.out / "cyber.ckpt").unlink(missing_ok=True)
     return result
+
+
+#: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter
+#: moved 5 % of its range farther than the chosen fix)
+ALTERNATIVE_H2_TOLERANCE = 0.05
+
+
+def _smallest_fix(shrunk: list[tuple[float, Mutation]], tolerance: float = ALTERNATIVE_H2_TOLERANCE
+                  ) -> tuple[tuple[float, Mutation], list[tuple[float, Mutation]]]:
+    """The smallest of the shrunk fixes ``(h2, mutation)`` (ties by parameter names), and the
+    fixes through other parameter sets within ``tolerance`` of it, smallest first: the same
+    margin expressed in another parameter, or a second suspect worth a look."""
+    order = sorted(shrunk, key=lambda x: (x[0], x[1].names))
+    best = order[0]
+    seen = {best[1].names}
+    near = []
+    for d, m in order[1:]:
+        if d <= best[0] + tolerance and m.names not in seen:
+            seen.add(m.names)
+            near.append((d, m))
+    return best, near
 
 
 def _first_fix(res: SearchResult, h1_limit: float) -> int | None:

@@ -50,6 +50,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "deviating_module": module,
         "path": diff.get("path", []),
         "misconfiguration": mis,
+        "alternatives": cyber.get("alternatives", []),
         "validation": done.get("validation"),
         "search_space": {"parameters_searched": searched, "parameters_total": total,
                          "reduction": (1 - searched / total) if searched else None,
@@ -95,6 +96,10 @@ def markdown(report: dict[str, Any]) -> str:
                      f"(walk: {' → '.join(report['path'])})")
     for m in report["misconfiguration"]:
         lines.append(f"- **Misconfiguration**: {m['parameter']} {_fmt(m['original'])} → {_fmt(m['mutated'])}")
+    for alt in report.get("alternatives", []):
+        lines.append("- **Nearly as small a fix**: " + ", ".join(
+            f"{m['parameter']} {_fmt(m['original'])} → {_fmt(m['mutated'])}"
+            for m in alt["misconfiguration"]) + f" (h2 {alt['h2']:.4g})")
     v = report["validation"]
     if v and v["variants"]:
         lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "

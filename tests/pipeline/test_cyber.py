@@ -61,3 +61,18 @@ def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory
     # when no fix keeps the trajectory, the one that changes it least is the only candidate
     far = SearchResult(candidates=[drift, cand({"planning.e": 1.0}, 3.0, 1.5)], front=[])
     assert [c.mutation.names for c in _fix_candidates(far, 1.0, 3)] == [("planning.e",)]
+
+
+def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are_kept():
+    from rocas.pipeline.analyze import _smallest_fix
+
+    dist = Mutation({"planning.min_overtake_distance_m": 1.64})
+    buf = Mutation({"planning.overtake_time_buffer_s": 0.82})
+    buf2 = Mutation({"planning.overtake_time_buffer_s": 0.7})
+    horizon = Mutation({"planning.overlap_check_horizon_s": 2.4})
+    best, near = _smallest_fix([(1.036, buf), (1.366, horizon), (1.034, dist), (1.04, buf2)])
+    assert best == (1.034, dist)
+    assert near == [(1.036, buf)]          # the same parameter set once; 1.366 is too far
+    assert _smallest_fix([(1.2, horizon)]) == ((1.2, horizon), [])
+    # ties go to the parameter names, whatever the order the candidates came in
+    assert _smallest_fix([(1.1, horizon), (1.1, dist)])[0][1] == dist
