@@ -53,7 +53,7 @@ from rocas.pipeline.physical import (
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import Executor, make_executor
 from rocas.search.ga import Candidate, GenerationStats, SearchConfig, SearchResult, run_search
-from rocas.search.minimize import shrink_magnitudes, shrink_set
+from rocas.search.minimize import shrink_all_magnitudes, shrink_set, shrink_sets
 from rocas.search.objectives import ego_dissimilarity, scenario_dissimilarity, suspiciousness
 from rocas.search.space import Mutation, MutationSpace
 from rocas.sim.oracles import Outcome
@@ -391,33 +391,30 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     if candidates:
         # the search ranks fixes by the size it happened to try; each of the best few is shrunk
         # (set, then magnitudes) and the smallest shrunk fix wins
-        shrunk = []
         run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
         # every shrink trial is scored once: candidates often shrink through the same mutations,
-        # and the search has already scored many of them
+        # and the search has already scored many of them; the candidates shrink in lockstep,
+        # one batch per round
         scored = {c.mutation: (c.objectives, c.constraint) for c in res.candidates}
-        for cand in candidates:
-            limit = max(run.cfg.h1_limit_m2, cand.objectives[0])
+        limits = [max(run.cfg.h1_limit_m2, c.objectives[0]) for c in candidates]
 
-            def holds(ms: list[Mutation], limit: float = limit) -> list[bool]:
-                todo = list(dict.fromkeys(m for m in ms if m not in scored))
-                if todo:
-                    scored.update(zip(todo, batch(todo), strict=True))
-                return [scored[m][1] <= 0.0 and scored[m][0][0] <= limit for m in ms]
+        def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
+            todo = list(dict.fromkeys(m for _, m in trials if m not in scored))
+            if todo:
+                scored.update(zip(todo, batch(todo), strict=True))
+            return [scored[m][1] <= 0.0 and scored[m][0][0] <= limits[i] for i, m in trials]
 
-            before = len(scored)
-            small, _ = shrink_set(cand.mutation, holds)
-            small, _ = shrink_magnitudes(small, space, holds)
-            simulated = len(scored) - before
-            evaluations += simulated
-            shrunk.append((space.distance(small), small.names, small, cand, simulated))
-        (_, small), near = _smallest_fix([(d, m) for d, _, m, _, _ in shrunk])
-        chosen = next(c for _, _, m, c, _ in shrunk if m is small)
+        before = len(scored)
+        smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
+        smalls, _ = shrink_all_magnitudes(smalls, space, holds)
+        evaluations += len(scored) - before
+        (_, small), near = _smallest_fix([(space.distance(m), m) for m in smalls])
+        chosen = candidates[next(i for i, m in enumerate(smalls) if m is small)]
         result["search_best"] = _cand_json(chosen)
-        result["minimise_evaluations"] = sum(x[4] for x in shrunk)
+        result["minimise_evaluations"] = len(scored) - before
         result["shrunk_candidates"] = [
             {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
-             "h2": round(d, 6)} for d, _, m, c, _ in shrunk]
+             "h2": round(space.distance(m), 6)} for c, m in zip(candidates, smalls, strict=True)]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
 
         def described(m: Mutation) -> list[dict[str, Any]]:

@@ -9,7 +9,12 @@ from rocas.search.executor import (
     register_executor,
 )
 from rocas.search.ga import Candidate, SearchConfig, SearchResult, pareto_front, run_search
-from rocas.search.minimize import shrink_magnitudes, shrink_set
+from rocas.search.minimize import (
+    shrink_all_magnitudes,
+    shrink_magnitudes,
+    shrink_set,
+    shrink_sets,
+)
 from rocas.search.objectives import (
     ego_dissimilarity,
     scenario_dissimilarity,
@@ -35,8 +40,10 @@ __all__ = [
     "register_executor",
     "run_search",
     "scenario_dissimilarity",
+    "shrink_all_magnitudes",
     "shrink_magnitudes",
     "shrink_set",
+    "shrink_sets",
     "suspiciousness",
     "trajectory_mse",
 ]

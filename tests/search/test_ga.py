@@ -75,7 +75,7 @@ def test_shrink_magnitudes_moves_towards_the_boundary():
     def holds(ms):
         return [search_toy.avoided(m) for m in ms]
 
-    small, _ = shrink_magnitudes(Mutation({"truck.speed": 2.0}), SPACE, holds, steps=8)
+    small, _ = shrink_magnitudes(Mutation({"truck.speed": 2.0}), SPACE, holds, rounds=3)
     assert 7.9 <= small.values["truck.speed"] <= 8.0
 
 
