@@ -77,11 +77,13 @@ def render(res: dict, env: Env) -> None:
                   "of the parameters (the paper: 85.8 %)")
     for c in res["scope_comparison"]:
         mo, al = c["module"], c["all"]
-        ratio = (al["first_fix_evaluation"] / mo["first_fix_evaluation"]
-                 if al["first_fix_evaluation"] and mo["first_fix_evaluation"] else None)
-        con.print(f"{c['id']}: first fix after {mo['first_fix_evaluation']} simulations over "
-                  f"{mo['parameters']} parameters (--scope module) vs {al['first_fix_evaluation'] or 'none'} "
-                  f"over {al['parameters']} (--scope all)" + (f": {ratio:.1f}x" if ratio else ""))
+        known_m, known_a = mo.get("first_fix_batch_evaluations"), al.get("first_fix_batch_evaluations")
+        ratio = known_a / known_m if known_a and known_m else None
+        con.print(f"{c['id']}: first fix known after {known_m or 'none'} simulations over "
+                  f"{mo['parameters']} parameters (--scope module) vs {known_a or 'none'} over "
+                  f"{al['parameters']} (--scope all)" + (f": {ratio:.1f}x" if ratio else "")
+                  + f"  [position in its batch: {mo['first_fix_evaluation'] or '-'} vs "
+                  f"{al['first_fix_evaluation'] or '-'}]")
     for p in res["instances"]:
         con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")

@@ -385,7 +385,8 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
                               "generations": [_gen_json(g) for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
-                              "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2)}
+                              "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
+                              "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
     candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates)
     evaluations = res.evaluations
     if candidates:
@@ -461,6 +462,18 @@ def _first_fix(res: SearchResult, h1_limit: float) -> int | None:
         if c.feasible and c.objectives[0] <= h1_limit:
             return i
     return None
+
+
+def _first_fix_batch(res: SearchResult, h1_limit: float) -> int | None:
+    """How many simulations had run when the first fix became known: a generation (the
+    screening too) is evaluated as one batch, so its every simulation is paid before any of its
+    results is in. Unlike :func:`_first_fix` this does not depend on where in its batch the
+    fix happened to sit."""
+    i = _first_fix(res, h1_limit)
+    if i is None:
+        return None
+    gen = res.candidates[i - 1].generation
+    return next((g.evaluations for g in res.generations if g.generation == gen), i)
 
 
 def _fix_candidates(res: SearchResult, h1_limit: float, count: int) -> list[Candidate]:

@@ -82,7 +82,8 @@ def run_bench(
                      "expected": exp, "found": fnd, "marks": marks, "hit": marks["hit"],
                      "seconds": round(seconds, 2), "timings_s": report["timings_s"],
                      "evaluations": report["evaluations"], "search_space": report["search_space"],
-                     "first_fix_evaluation": report.get("first_fix_evaluation")})
+                     "first_fix_evaluation": report.get("first_fix_evaluation"),
+                     "first_fix_batch_evaluations": report.get("first_fix_batch_evaluations")})
 
     totals: dict[str, float] = {}
     for r in rows:
@@ -104,10 +105,12 @@ def run_bench(
         comparison.append({
             "id": r["id"],
             "module": {"first_fix_evaluation": r["first_fix_evaluation"],
+                       "first_fix_batch_evaluations": r["first_fix_batch_evaluations"],
                        "cyber_evaluations": r["evaluations"].get("cyber"),
                        "cyber_seconds": r["timings_s"].get("cyber"),
                        "parameters": r["search_space"]["parameters_searched"]},
             "all": {"first_fix_evaluation": rep.get("first_fix_evaluation"),
+                    "first_fix_batch_evaluations": rep.get("first_fix_batch_evaluations"),
                     "cyber_evaluations": rep["evaluations"].get("cyber"),
                     "cyber_seconds": rep["timings_s"].get("cyber"),
                     "parameters": rep["search_space"]["parameters_searched"],

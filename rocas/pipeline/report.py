@@ -56,6 +56,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
                          "reduction": (1 - searched / total) if searched else None,
                          "scope": cyber.get("scope")},
         "first_fix_evaluation": cyber.get("first_fix_evaluation"),
+        "first_fix_batch_evaluations": cyber.get("first_fix_batch_evaluations"),
         "evaluations": dict(state["evaluations"]),
         "timings_s": dict(state["timings_s"]),
     }

@@ -2,6 +2,7 @@
 braking limits (capping braking hides an emergency instead of avoiding it), and sensing limits
 only widened (narrowing them hides the cause too)."""
 
+import numpy as np
 import pytest
 
 from rocas.ads.params import BRAKING_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
@@ -76,3 +77,25 @@ def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are
     assert _smallest_fix([(1.2, horizon)]) == ((1.2, horizon), [])
     # ties go to the parameter names, whatever the order the candidates came in
     assert _smallest_fix([(1.1, horizon), (1.1, dist)])[0][1] == dist
+
+
+def test_a_fix_is_known_only_when_its_whole_batch_has_run():
+    from rocas.pipeline.analyze import _first_fix, _first_fix_batch
+    from rocas.search.ga import Candidate, GenerationStats, SearchResult
+
+    def cand(name, gen, ok):
+        return Candidate(Mutation({name: 1.0}), (0.0, 1.1), -1.0 if ok else 0.5, gen)
+
+    def gen(g, evaluations):
+        return GenerationStats(g, evaluations, 0, 0.0, np.zeros((0, 2)), np.zeros(0))
+
+    # the screening batch (generation 0) holds 4 simulations, generation 1 another 3
+    cands = [cand("a", 0, False), cand("b", 0, False), cand("c", 0, False), cand("d", 0, False),
+             cand("e", 1, False), cand("f", 1, True), cand("g", 1, True)]
+    res = SearchResult(candidates=cands, front=[], generations=[gen(0, 4), gen(1, 7)])
+    assert _first_fix(res, 1.0) == 6 and _first_fix_batch(res, 1.0) == 7
+    early = SearchResult(candidates=[cands[0], cand("b", 0, True), *cands[2:]], front=[],
+                         generations=res.generations)
+    assert _first_fix(early, 1.0) == 2 and _first_fix_batch(early, 1.0) == 4
+    none = SearchResult(candidates=cands[:5], front=[], generations=res.generations)
+    assert _first_fix_batch(none, 1.0) is None
