@@ -39,3 +39,25 @@ def test_bench_scoring():
     assert not score(exp, {**hit, "deviating_module": "planning"})["hit"]
     no_fix = {"verdict": "no_configuration_fix", "deviating_module": "perception", "parameters": []}
     assert score(no_fix, {**no_fix})["hit"]
+
+
+def test_progress_bars_finish_each_phase_when_the_next_starts():
+    import io
+
+    from rocas.cli.analyze import _Progress
+    from rocas.cli.console import Env
+
+    err = io.StringIO()
+    with _Progress(Env(stdout=io.StringIO(), stderr=err), {"physical": 240, "validation": 8}) as p:
+        p("replay", {})
+        p("physical", {})
+        p("physical", {"generation": 3, "evaluations": 72, "feasible": 5})
+        p("diff", {})
+        tasks = {t.description: t for t in p._p.tasks}
+        assert tasks["replay"].finished and tasks["physical"].finished
+        assert tasks["physical"].fields["count"] == "72 sims" and not tasks["diff"].finished
+        p("validation", {"variants": 4})
+    tasks = {t.description: t for t in p._p.tasks}
+    assert all(t.finished for t in tasks.values())
+    assert tasks["validation"].fields["count"] == "8 sims" and tasks["diff"].fields["count"] == "done"
+    assert "0/?" not in err.getvalue()
