@@ -82,8 +82,8 @@ def render(res: dict, env: Env) -> None:
         con.print(f"{c['id']}: first fix known after {known_m or 'none'} simulations over "
                   f"{mo['parameters']} parameters (--scope module) vs {known_a or 'none'} over "
                   f"{al['parameters']} (--scope all)" + (f": {ratio:.1f}x" if ratio else "")
-                  + f"  [position in its batch: {mo['first_fix_evaluation'] or '-'} vs "
-                  f"{al['first_fix_evaluation'] or '-'}]")
+                  + f" (the fix's position in its batch: {mo['first_fix_evaluation'] or '-'} vs "
+                  f"{al['first_fix_evaluation'] or '-'})")
     for p in res["instances"]:
         con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")

@@ -61,3 +61,22 @@ def test_progress_bars_finish_each_phase_when_the_next_starts():
     assert all(t.finished for t in tasks.values())
     assert tasks["validation"].fields["count"] == "8 sims" and tasks["diff"].fields["count"] == "done"
     assert "0/?" not in err.getvalue()
+
+
+def test_bench_prints_the_scope_ratio_from_when_the_first_fix_is_known():
+    import io
+
+    from rocas.cli.bench import render
+    from rocas.cli.console import Env
+
+    side = {"first_fix_evaluation": 1, "first_fix_batch_evaluations": 82, "parameters": 42}
+    res = {"hits": 0, "total": 0, "entries": [], "time_breakdown": {"cyber": 1.0},
+           "time_total_s": 1.0, "search_space_reduction_mean": None, "instances": [],
+           "scope_comparison": [{"id": "a05", "module": side, "all": {
+               **side, "first_fix_evaluation": 6, "first_fix_batch_evaluations": 246,
+               "parameters": 129}}]}
+    out = io.StringIO()
+    render(res, Env(stdout=out, stderr=io.StringIO()))
+    line = next(x for x in out.getvalue().splitlines() if x.startswith("a05"))
+    assert "after 82 simulations" in line and "vs 246" in line and "3.0x" in line
+    assert "position in its batch: 1 vs 6" in line
