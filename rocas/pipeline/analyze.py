@@ -278,18 +278,17 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
         # drop properties the avoidance does not need (a search often carries passengers,
         # e.g. a 0.0001 m move of a bystander), keeping the reference as similar as chosen
         f2_limit = chosen.objectives[1] + F2_TOLERANCE_M2
-        scored: dict[Mutation, tuple[tuple[float, ...], float]] = {}
+        scores = _Scores(batch, res.candidates)
 
         def holds(ms: list[Mutation]) -> list[bool]:
-            scored.update(zip(ms, batch(ms), strict=True))
-            return [scored[m][1] <= 0.0 and scored[m][0][1] <= f2_limit for m in ms]
+            return [cons <= 0.0 and objs[1] <= f2_limit for objs, cons in scores.of(ms)]
 
-        small, n_shrink = shrink_set(chosen.mutation, holds)
-        evaluations += n_shrink
-        result["shrink_evaluations"] = n_shrink
+        small, _ = shrink_set(chosen.mutation, holds)
+        evaluations += scores.simulated
+        result["shrink_evaluations"] = scores.simulated
         result["search_chosen"] = _cand_json(chosen)
         if small != chosen.mutation:  # a trial that held: its objectives are already known
-            objs, cons = scored[small]
+            objs, cons = scores.of([small])[0]
             chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
         entity = mutated_entities(space, chosen.mutation)
         result["chosen"] = _cand_json(chosen)
@@ -393,26 +392,23 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         # the search ranks fixes by the size it happened to try; each of the best few is shrunk
         # (set, then magnitudes) and the smallest shrunk fix wins
         run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
-        # every shrink trial is scored once: candidates often shrink through the same mutations,
-        # and the search has already scored many of them; the candidates shrink in lockstep,
-        # one batch per round
-        scored = {c.mutation: (c.objectives, c.constraint) for c in res.candidates}
+        # candidates often shrink through the same mutations, and the search has already
+        # scored many of them; the candidates shrink in lockstep, one batch per round
+        scores = _Scores(batch, res.candidates)
         limits = [max(run.cfg.h1_limit_m2, c.objectives[0]) for c in candidates]
 
         def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
-            todo = list(dict.fromkeys(m for _, m in trials if m not in scored))
-            if todo:
-                scored.update(zip(todo, batch(todo), strict=True))
-            return [scored[m][1] <= 0.0 and scored[m][0][0] <= limits[i] for i, m in trials]
+            return [cons <= 0.0 and objs[0] <= limits[i]
+                    for (i, _), (objs, cons) in zip(trials, scores.of([m for _, m in trials]),
+                                                    strict=True)]
 
-        before = len(scored)
         smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
         smalls, _ = shrink_all_magnitudes(smalls, space, holds)
-        evaluations += len(scored) - before
-        (_, small), near = _smallest_fix([(space.distance(m), m) for m in smalls])
-        chosen = candidates[next(i for i, m in enumerate(smalls) if m is small)]
+        evaluations += scores.simulated
+        best, near = _smallest_fix([space.distance(m) for m in smalls], smalls)
+        small, chosen = smalls[best], candidates[best]
         result["search_best"] = _cand_json(chosen)
-        result["minimise_evaluations"] = len(scored) - before
+        result["minimise_evaluations"] = scores.simulated
         result["shrunk_candidates"] = [
             {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
              "h2": round(space.distance(m), 6)} for c, m in zip(candidates, smalls, strict=True)]
@@ -424,8 +420,8 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
                     for n in m.names]
 
         result["misconfiguration"] = described(small)
-        result["alternatives"] = [{"h2": round(d, 6), "misconfiguration": described(m)}
-                                  for d, m in near]
+        result["alternatives"] = [{"h2": round(space.distance(smalls[i]), 6),
+                                   "misconfiguration": described(smalls[i])} for i in near]
         simulate(scn, params=result["fix"], output=run.out / "fixed.mcap")
     write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=_jsonable))
     run.finish("cyber", result, time.perf_counter() - t0, evaluations)
@@ -438,20 +434,38 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
 ALTERNATIVE_H2_TOLERANCE = 0.05
 
 
-def _smallest_fix(shrunk: list[tuple[float, Mutation]], tolerance: float = ALTERNATIVE_H2_TOLERANCE
-                  ) -> tuple[tuple[float, Mutation], list[tuple[float, Mutation]]]:
-    """The smallest of the shrunk fixes ``(h2, mutation)`` (ties by parameter names), and the
+def _smallest_fix(h2: list[float], fixes: list[Mutation],
+                  tolerance: float = ALTERNATIVE_H2_TOLERANCE) -> tuple[int, list[int]]:
+    """Index of the smallest shrunk fix (h2, ties by parameter names), and the indices of the
     fixes through other parameter sets within ``tolerance`` of it, smallest first: the same
     margin expressed in another parameter, or a second suspect worth a look."""
-    order = sorted(shrunk, key=lambda x: (x[0], x[1].names))
+    order = sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names))
     best = order[0]
-    seen = {best[1].names}
+    seen = {fixes[best].names}
     near = []
-    for d, m in order[1:]:
-        if d <= best[0] + tolerance and m.names not in seen:
-            seen.add(m.names)
-            near.append((d, m))
+    for i in order[1:]:
+        if h2[i] <= h2[best] + tolerance and fixes[i].names not in seen:
+            seen.add(fixes[i].names)
+            near.append(i)
     return best, near
+
+
+class _Scores:
+    """(objectives, constraint) per mutation, each simulated once: seeded with what a search
+    already scored, the rest run in one batch per call."""
+
+    def __init__(self, batch: Callable[[list[Mutation]], list[tuple[tuple[float, ...], float]]],
+                 known: list[Candidate]) -> None:
+        self._batch = batch
+        self._scores = {c.mutation: (c.objectives, c.constraint) for c in known}
+        self.simulated = 0
+
+    def of(self, ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        todo = list(dict.fromkeys(m for m in ms if m not in self._scores))
+        if todo:
+            self._scores.update(zip(todo, self._batch(todo), strict=True))
+            self.simulated += len(todo)
+        return [self._scores[m] for m in ms]
 
 
 def _first_fix(res: SearchResult, h1_limit: float) -> int | None:

@@ -71,12 +71,13 @@ def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are
     buf = Mutation({"planning.overtake_time_buffer_s": 0.82})
     buf2 = Mutation({"planning.overtake_time_buffer_s": 0.7})
     horizon = Mutation({"planning.overlap_check_horizon_s": 2.4})
-    best, near = _smallest_fix([(1.036, buf), (1.366, horizon), (1.034, dist), (1.04, buf2)])
-    assert best == (1.034, dist)
-    assert near == [(1.036, buf)]          # the same parameter set once; 1.366 is too far
-    assert _smallest_fix([(1.2, horizon)]) == ((1.2, horizon), [])
+    fixes = [buf, horizon, dist, buf2]
+    best, near = _smallest_fix([1.036, 1.366, 1.034, 1.04], fixes)
+    assert fixes[best] == dist
+    assert [fixes[i] for i in near] == [buf]   # the same parameter set once; 1.366 is too far
+    assert _smallest_fix([1.2], [horizon]) == (0, [])
     # ties go to the parameter names, whatever the order the candidates came in
-    assert _smallest_fix([(1.1, horizon), (1.1, dist)])[0][1] == dist
+    assert _smallest_fix([1.1, 1.1], [horizon, dist])[0] == 1
 
 
 def test_a_fix_is_known_only_when_its_whole_batch_has_run():
