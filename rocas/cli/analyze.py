@@ -144,7 +144,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rich.panel import Panel
     from rich.table import Table
 
-    from rocas.pipeline.report import _fmt
+    from rocas.pipeline.report import change
 
     con = env.out()
     t = Table(show_header=False, box=None, padding=(0, 1))
@@ -158,16 +158,14 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     trig = report["triggering_entity"]
     if trig:
         for p in trig["properties"]:
-            t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {p['name']} "
-                      f"{_fmt(p['original'])} -> {_fmt(p['mutated'])}")
+            t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
         t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
     for m in report["misconfiguration"]:
-        t.add_row("misconfiguration", f"{m['parameter']} {_fmt(m['original'])} -> {_fmt(m['mutated'])}")
+        t.add_row("misconfiguration", change(m, "->"))
     for alt in report.get("alternatives", []):
-        t.add_row("nearly as small", ", ".join(
-            f"{m['parameter']} {_fmt(m['original'])} -> {_fmt(m['mutated'])}"
-            for m in alt["misconfiguration"]) + f"  (h2 {alt['h2']:.4g})")
+        t.add_row("nearly as small", ", ".join(change(m, "->") for m in alt["misconfiguration"])
+                  + f"  (h2 {alt['h2']:.4g})")
     v = report["validation"]
     if v and v["variants"]:
         orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]

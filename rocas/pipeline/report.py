@@ -80,6 +80,11 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def change(item: dict[str, Any], arrow: str = "→") -> str:
+    """"name original → mutated" for a triggering property or a misconfigured parameter."""
+    return f"{item.get('parameter', item.get('name'))} {_fmt(item['original'])} {arrow} {_fmt(item['mutated'])}"
+
+
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
@@ -91,16 +96,15 @@ def markdown(report: dict[str, Any]) -> str:
     if trig:
         for p in trig["properties"]:
             lines.append(f"- **Triggering entity**: {trig['entity']} ({trig['kind']}): "
-                         f"{p['name']} {_fmt(p['original'])} → {_fmt(p['mutated'])}")
+                         f"{change(p)}")
     if report["deviating_module"]:
         lines.append(f"- **Deviating module**: {report['deviating_module']} "
                      f"(walk: {' → '.join(report['path'])})")
     for m in report["misconfiguration"]:
-        lines.append(f"- **Misconfiguration**: {m['parameter']} {_fmt(m['original'])} → {_fmt(m['mutated'])}")
+        lines.append(f"- **Misconfiguration**: {change(m)}")
     for alt in report.get("alternatives", []):
-        lines.append("- **Nearly as small a fix**: " + ", ".join(
-            f"{m['parameter']} {_fmt(m['original'])} → {_fmt(m['mutated'])}"
-            for m in alt["misconfiguration"]) + f" (h2 {alt['h2']:.4g})")
+        lines.append("- **Nearly as small a fix**: "
+                     + ", ".join(change(m) for m in alt["misconfiguration"]) + f" (h2 {alt['h2']:.4g})")
     v = report["validation"]
     if v and v["variants"]:
         lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "
