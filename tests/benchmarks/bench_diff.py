@@ -8,7 +8,10 @@ planning with 30 obstacles and 80-point forecasts, ~1 MB/s of serialized message
 - the same run's baseline: merely reading and decoding both files with mcap +
   mcap-protobuf-support (one DecoderFactory per file), and the ratio (target <= 3x);
 - peak memory (max RSS of a fresh process running the diff) for 1x and 10x the length
-  (target: flat, since both files are streamed).
+  (target: flat, since both files are streamed);
+- the change-point solver: ``ruptures.KernelCPD(kernel="linear")`` against
+  ``ruptures.Pelt(model="l2")`` (the same segmentation) on noisy step series of 300 and 1200
+  bins, and the speed-up.
 
 Usage: python tests/benchmarks/bench_diff.py [--long-factor 10]
 """
@@ -57,6 +60,29 @@ def peak(acc: str, ref: str) -> tuple[float, float, str]:
     return float(out[0]), float(out[1]), out[2]
 
 
+def pelt_speedup(repeat: int) -> None:
+    import numpy as np
+    import ruptures
+
+    for n in (300, 1200):
+        rng = np.random.default_rng(0)
+        y = (np.where(np.arange(n) >= n * 2 // 3, 1.0, 0.0) + 0.05 * rng.standard_normal(n))
+        y = y.reshape(-1, 1)
+        times = {}
+        for name, algo in (("KernelCPD linear", ruptures.KernelCPD(kernel="linear", min_size=2,
+                                                                      jump=1)),
+                           ("Pelt l2", ruptures.Pelt(model="l2", min_size=2, jump=1))):
+            best = float("inf")
+            for _ in range(repeat):
+                t = time.perf_counter()
+                ends = algo.fit(y).predict(pen=0.05)
+                best = min(best, time.perf_counter() - t)
+            times[name] = (best, ends)
+        (tk, ek), (tp, ep) = times["KernelCPD linear"], times["Pelt l2"]
+        print(f"change points, {n} bins: KernelCPD linear {1000 * tk:.2f} ms, Pelt l2 "
+              f"{1000 * tp:.1f} ms ({tp / tk:,.0f}x), same result: {ek == ep}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--long-factor", type=int, default=10)
@@ -94,6 +120,7 @@ def main() -> None:
         s10, m10, dev10 = peak(acc10, ref10)
         print(f"peak RSS {args.long_factor}x ({long_cfg.duration_s:.0f} s): {m10:.0f} MB  "
               f"(diff {s10:.1f} s, {dev10}); ratio {m10 / m1:.2f}")
+    pelt_speedup(args.repeat)
 
 
 if __name__ == "__main__":
