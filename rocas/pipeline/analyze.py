@@ -277,7 +277,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
     if chosen is not None:
         # drop properties the avoidance does not need (a search often carries passengers,
         # e.g. a 0.0001 m move of a bystander), keeping the reference as similar as chosen
-        f2_limit = chosen.objectives[1] + F2_TOLERANCE_M2
+        f2_limit = f2_tolerance(chosen.objectives[1])
         scores = _Scores(batch, res.candidates)
 
         def holds(ms: list[Mutation]) -> list[bool]:
@@ -305,15 +305,25 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
     return result
 
 
-#: f2 [m^2] within which front members count as equally similar to the original
+#: f2 [m^2] within which front members count as equally similar to the original ...
 F2_TOLERANCE_M2 = 1.0
+#: ... or this fraction of the best f2, whichever is larger: f2 is a mean squared distance,
+#: so its scale grows with speeds and duration, and a fixed margin that separates two
+#: references on a parking lot would call two highway references different
+F2_TOLERANCE_REL = 0.25
+
+
+def f2_tolerance(best_f2: float) -> float:
+    """The largest f2 [m^2] that counts as as similar to the original as ``best_f2``."""
+    return best_f2 + max(F2_TOLERANCE_M2, F2_TOLERANCE_REL * best_f2)
 
 
 def _choose_trigger(res: SearchResult, space: MutationSpace) -> Candidate | None:
     """The documented rule, over the feasible Pareto front:
 
-    1. keep the executions most similar to the original (f2 within F2_TOLERANCE_M2 of the
-       best): a good reference differs from the accident only where it must;
+    1. keep the executions most similar to the original (f2 within F2_TOLERANCE_M2 or
+       F2_TOLERANCE_REL of the best, whichever is larger; see f2_tolerance): a good
+       reference differs from the accident only where it must;
     2. then the fewest mutated entities (the triggering entity, not a coalition);
     3. then the most suspicious (f1: close to and in front of the ego);
     4. then the smallest change (f3);
@@ -325,7 +335,7 @@ def _choose_trigger(res: SearchResult, space: MutationSpace) -> Candidate | None
     if not res.front:
         return None
     best_f2 = min(c.objectives[1] for c in res.front)
-    similar = [c for c in res.front if c.objectives[1] <= best_f2 + F2_TOLERANCE_M2]
+    similar = [c for c in res.front if c.objectives[1] <= f2_tolerance(best_f2)]
     return min(similar, key=lambda c: (len(mutated_entities(space, c.mutation)), c.objectives[0],
                                        c.objectives[2], _removals(c.mutation), c.objectives[1],
                                        c.mutation.names))
