@@ -13,12 +13,15 @@ import numpy as np
 from rocas.ads.planning import R_BLOCKED, R_COLL, R_CRUISE, R_FALLBACK, R_PBRAKE
 from rocas.sim.dynamics import VehicleState
 from rocas.sim.geometry import box_corners, box_gap, clip, points_in_polygons
-from rocas.sim.world import BatchWorld, project_on_reference
+from rocas.sim.world import LIGHT_CODES, BatchWorld, light_state, project_on_reference
 
 HARD_BRAKE_MPS2 = 4.0          # [m/s^2] deceleration that counts as emergency braking
 STANDSTILL_MPS = 0.1           # [m/s]
 UNEXPECTED_STOP_S = 2.0        # [s] standing this long for no traffic reason is an anomaly
 MOVED_MPS = 1.0                # [m/s] the ego must have moved before a stop is unexpected
+#: [m] standing this close before the stop line of a red or yellow light on the ego's route is
+#: waiting at that light (in a queue, behind cars that wait too), whatever the planner's reason
+QUEUE_AT_LIGHT_M = 50.0
 #: Planning reasons under which standing still is not justified by traffic.
 UNJUSTIFIED_STOP_REASONS = (R_CRUISE, R_BLOCKED, R_PBRAKE, R_COLL, R_FALLBACK)
 COLLIDER_ACTOR, COLLIDER_OBJECT, COLLIDER_AREA = 0, 1, 2
@@ -149,8 +152,22 @@ class Oracles:
         self.moved |= ego.speed > MOVED_MPS
         unjust = np.isin(reason, UNJUSTIFIED_STOP_REASONS)
         standing = (ego.speed < STANDSTILL_MPS) & self.moved & unjust
+        if standing.any() and w.light_ids:
+            standing &= ~self._waiting_at_light(tick, ego)
         self.stand_time = np.where(standing, self.stand_time + w.dt_s, 0.0)
         self.unexpected |= clean & (self.stand_time >= UNEXPECTED_STOP_S)
+
+    def _waiting_at_light(self, tick: int, ego: VehicleState) -> np.ndarray:
+        """(N,) bool: the ego's front is within QUEUE_AT_LIGHT_M before the stop line of a
+        red or yellow light on its route. The planner may give another reason (it stops
+        behind the car in front, not at the line), but a queue at a light is traffic."""
+        w = self.world
+        color = light_state(w, tick * w.dt_s)  # (N, L)
+        stopping = (color == LIGHT_CODES["red"]) | (color == LIGHT_CODES["yellow"])
+        _, s, _ = project_on_reference(w.road, ego.x, ego.y)
+        ahead = w.light_stop_route_s[None, :] - (s + w.ego_dims[0] / 2)[:, None]  # (N, L)
+        near = np.isfinite(ahead) & (ahead >= -0.5) & (ahead <= QUEUE_AT_LIGHT_M)
+        return (stopping & near).any(axis=1)
 
     def finish_route(self, ego_xy: np.ndarray) -> None:
         """Route completion from the ego trajectory (N, T, 2): the farthest point reached."""

@@ -73,3 +73,19 @@ def test_precipitation_changes_the_world():
                                                              fog_density=90.0))
     res = simulate_batch([s, wet])
     assert not (res.ego[0] == res.ego[1]).all()
+
+
+def test_standing_behind_a_blocking_car_is_an_unexpected_stop_unless_queued_at_a_light():
+    """A stopped car blocks the lane: the ego stops behind it (the planner's reason is
+    "blocked") and stands. With no light that is an unexpected stop; with a red light 10 m
+    beyond the car the ego waits in a queue, which is traffic."""
+    queued = dict(ROAD, actors=[{"id": "waiting", "route": ["a"], "start_s_m": 70.0,
+                                 "speed_mps": 0.0}])
+    blocked = dict(queued, traffic_lights=[])
+    out = [simulate(scenario_from_dict(d)).outcome for d in (blocked, queued)]
+    assert out[0].unexpected_stop and out[0].emergency and not out[0].collided
+    assert not out[1].unexpected_stop and not out[1].emergency and not out[1].collided
+    # a green light does not make the wait legitimate
+    green = dict(queued, traffic_lights=[dict(ROAD["traffic_lights"][0],
+                                              policy={"mode": "fixed", "color": "green"})])
+    assert simulate(scenario_from_dict(green)).outcome.unexpected_stop
