@@ -216,7 +216,8 @@ _INVENTORY: tuple[Param, ...] = (
     _P("planning", "nudge_transition_m", 10.0, 2.0, 30.0, "m",
        "distance over which the path shifts to and from a nudge offset"),
     _P("planning", "lateral_safety_buffer_m", 0.3, 0.0, 3.0, "m",
-       "lateral buffer of the ST-overlap check between the path and predicted obstacles"),
+       "lateral buffer to moving obstacles: ST-overlap check, follow, and not drawing level "
+       "with a vehicle beside the path"),
     _P("planning", "use_path_tangent_heading", 1, 0, 1, "bool",
        "take an obstacle's heading from its predicted path tangent instead of its perceived heading"),
     _P("planning", "st_longitudinal_buffer_m", 1.0, 0.0, 10.0, "m",

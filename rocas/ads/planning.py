@@ -36,6 +36,8 @@ REASONS = ("cruise", "destination", "traffic_light", "follow", "yield", "blocked
 R_CRUISE, R_DEST, R_LIGHT, R_FOLLOW, R_YIELD, R_BLOCKED, R_VRU, R_PBRAKE, R_COLL, R_FALLBACK = (
     range(10))
 ACCEL_DECAY_S = 1.0  # [s] planned accelerations fade with this time constant
+HOLD_TAU_S = 0.5  # [s] a hold behind a vehicle beside the path closes its speed error this fast
+HOLD_RECOVER_S = 2.0  # [s] ... and drops back to its hold gap over this time when too close
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,9 +168,10 @@ class Planning:
 
         # --- moving obstacles: follow, VRU stop, ST overlap -> yield / overtake -------------
         d_obs = offset_at(so)
-        in_path_now = consider & (np.abs(lo - d_obs) < hw_e + lat_ext
-                                  + c("lateral_safety_buffer_m") + buf_vru) & (
-            so - lon_ext > s0[:, None])
+        # lateral clearance between the obstacle's body and the ego's swept width (< 0: overlap)
+        lat_gap = np.abs(lo - d_obs) - (hw_e + lat_ext + buf_vru)
+        ahead_now = so - lon_ext > s0[:, None]
+        in_path_now = consider & (lat_gap < c("lateral_safety_buffer_m")) & ahead_now
         dir_rel = np.abs(wrap_angle(np.arctan2(pred.vy, pred.vx) - ref_h))
         aligned = dir_rel < np.pi / 4
         moving_vru = vru & ~pred.is_static
@@ -178,6 +181,7 @@ class Planning:
         mov = not_behind & ~pred.is_static
         cols = np.flatnonzero(mov.any(axis=0))
         any_over = np.zeros((n, m), dtype=bool)
+        body_over = np.zeros((n, m), dtype=bool)
         k_in = np.zeros((n, m), dtype=np.int64)
         s_lo = np.full((n, m), np.inf)
         s_hi = np.full((n, m), -np.inf)
@@ -198,14 +202,21 @@ class Planning:
                        + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
                     & (sk + lon_k > (s0 - hl_e)[:, None, None]))
             any_over[sub] = over.any(-1)
+            body_k = over & (np.abs(lk - offset_at(sk)) < hw_e + lat_k + buf_vru[sub][..., None])
+            body_over[sub] = body_k.any(-1)
             k_in[sub] = np.argmax(over, axis=-1)
             s_lo[sub] = np.min(np.where(over, sk - lon_k, np.inf), -1)
             s_hi[sub] = np.max(np.where(over, sk + lon_k, -np.inf), -1)
         t_in = np.take_along_axis(pred.traj_t, k_in, axis=1)
+        # a vehicle going the ego's way whose body is clear of the swept width, now and along its
+        # forecast, but inside the lateral buffer is not followed: the ego only declines to draw
+        # level with it (the hold below)
+        beside = follow & ~vru & (lat_gap >= 0.0) & ~body_over
+        follow &= ~beside
         s_lo = s_lo - c("st_longitudinal_buffer_m")
         s_hi = s_hi + c("st_longitudinal_buffer_m")
         behind_same_way = aligned & (so < s0[:, None])
-        cross = any_over & ~follow & ~vru_stop & ~behind_same_way
+        cross = any_over & ~follow & ~beside & ~vru_stop & ~behind_same_way
         # time for the ego's rear to clear the region plus the margin, accelerating at
         # max_accel up to the cruise speed
         dist_pass = np.maximum(s_hi + c("min_overtake_distance_m") - (s0 - hl_e)[:, None], 0.0)
@@ -268,13 +279,28 @@ class Planning:
             sstar / np.maximum(np.where(active, gaps, 1.0), 0.1)) ** 2, inf)
         binding = np.argmin(a_c, axis=1)
         a_cmd = np.minimum(a_free, a_c.min(axis=1))
-        a_cmd = clip(a_cmd, -p["max_decel_mps2"], amax)
         bound = np.isfinite(a_c.min(axis=1)) & (a_c.min(axis=1) < a_free)
         reason = np.where(bound, reasons[np.arange(n), binding], R_CRUISE)
         bind_gap = np.where(bound, gaps[np.arange(n), binding], inf)
+        # hold behind a vehicle beside the path: the closing speed is capped so that the ego,
+        # braking at the comfortable deceleration, ends at the vehicle's speed a standstill gap
+        # plus a yield headway behind its rear (late, unlike IDM's following); never harder
+        if beside.any():
+            gap_b = np.where(beside, so - lon_ext - (s0 + hl_e)[:, None], inf)
+            gap_h = gap_b - c("follow_distance_m") - v_lead * c("yield_time_headway_s")
+            v_hold = v_lead + np.where(gap_h > 0.0, np.sqrt(
+                2.0 * c("comfort_decel_mps2") * np.maximum(gap_h, 0.0)), gap_h / HOLD_RECOVER_S)
+            a_hold = np.maximum((v_hold - v0[:, None]) / HOLD_TAU_S, -c("comfort_decel_mps2"))
+            a_hold = np.where(beside, a_hold, inf).min(axis=1)
+            held = a_hold < a_cmd
+            a_cmd = np.minimum(a_cmd, a_hold)
+            reason = np.where(held, R_FOLLOW, reason)
+            bind_gap = np.where(held, np.where(beside, gap_b, inf).min(axis=1), bind_gap)
+            bound |= held
+        a_cmd = clip(a_cmd, -p["max_decel_mps2"], amax)
         # hold still at a stop point reached (no creeping)
-        at_stop = (v0 < p["standstill_speed_mps"]) & bound & (reasons[np.arange(n), binding]
-                                                              != R_FOLLOW) & (bind_gap < 2.0)
+        at_stop = (v0 < p["standstill_speed_mps"]) & bound & (reason != R_FOLLOW) & (
+            bind_gap < 2.0)
         a_cmd = np.where(at_stop, np.minimum(a_cmd, 0.0), a_cmd)
         estop = np.zeros(n, dtype=bool)
         estop_reason = np.zeros(n, dtype=np.int64)
@@ -330,10 +356,11 @@ class Planning:
             traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # --- decisions --------------------------------------------------------------------
         w = np.where
-        decision = w(~(consider | mov), D_IGNORE, w(follow, D_FOLLOW, w(yield_, D_YIELD, w(
+        decision = w(~(consider | mov), D_IGNORE, w(follow | beside, D_FOLLOW, w(yield_, D_YIELD, w(
             overtake, D_OVERTAKE, w(vru_stop, D_STOP, w(blocking, w(no_path[:, None], D_STOP,
                                                                    D_NUDGE), D_IGNORE))))))
-        decision_s = w(decision == D_FOLLOW, gap_follow, w(
+        gap_beside = np.where(beside, so - lon_ext - s0[:, None] - hl_e, inf)
+        decision_s = w(decision == D_FOLLOW, np.minimum(gap_follow, gap_beside), w(
             decision == D_YIELD, stop_yield - s0[:, None], w(
                 decision == D_OVERTAKE, s_hi - s0[:, None], w(
                     decision == D_STOP, np.minimum(stop_vru, so - lon_ext) - s0[:, None], 0.0))))
