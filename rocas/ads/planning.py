@@ -235,7 +235,10 @@ class Planning:
         yield_ = cross & ~overtake & (s_lo > (s0 + hl_e)[:, None])
         # --- constraints -> IDM ---------------------------------------------------------------
         inf = np.inf
-        gap_follow = np.where(follow, so - lon_ext - (s0 + hl_e)[:, None], inf)
+        # bumper-to-rear gap to each obstacle ahead; followed and beside vehicles use it
+        gap_rear = so - lon_ext - (s0 + hl_e)[:, None]
+        gap_follow = np.where(follow, gap_rear, inf)
+        gap_beside = np.where(beside, gap_rear, inf)
         v_lead = np.maximum(pred.speed * np.cos(np.minimum(dir_rel, np.pi / 2)), 0.0)
         stop_yield = np.where(yield_, s_lo - c("yield_distance_m") - hl_e, inf)
         stop_vru = np.where(vru_stop, so - lon_ext - c("pedestrian_stop_buffer_m") - hl_e, inf)
@@ -286,8 +289,7 @@ class Planning:
         # braking at the comfortable deceleration, ends at the vehicle's speed a standstill gap
         # plus a yield headway behind its rear (late, unlike IDM's following); never harder
         if beside.any():
-            gap_b = np.where(beside, so - lon_ext - (s0 + hl_e)[:, None], inf)
-            gap_h = gap_b - c("follow_distance_m") - v_lead * c("yield_time_headway_s")
+            gap_h = gap_beside - c("follow_distance_m") - v_lead * c("yield_time_headway_s")
             v_hold = v_lead + np.where(gap_h > 0.0, np.sqrt(
                 2.0 * c("comfort_decel_mps2") * np.maximum(gap_h, 0.0)), gap_h / HOLD_RECOVER_S)
             a_hold = np.maximum((v_hold - v0[:, None]) / HOLD_TAU_S, -c("comfort_decel_mps2"))
@@ -295,7 +297,7 @@ class Planning:
             held = a_hold < a_cmd
             a_cmd = np.minimum(a_cmd, a_hold)
             reason = np.where(held, R_FOLLOW, reason)
-            bind_gap = np.where(held, np.where(beside, gap_b, inf).min(axis=1), bind_gap)
+            bind_gap = np.where(held, gap_beside.min(axis=1), bind_gap)
             bound |= held
         a_cmd = clip(a_cmd, -p["max_decel_mps2"], amax)
         # hold still at a stop point reached (no creeping)
@@ -359,7 +361,6 @@ class Planning:
         decision = w(~(consider | mov), D_IGNORE, w(follow | beside, D_FOLLOW, w(yield_, D_YIELD, w(
             overtake, D_OVERTAKE, w(vru_stop, D_STOP, w(blocking, w(no_path[:, None], D_STOP,
                                                                    D_NUDGE), D_IGNORE))))))
-        gap_beside = np.where(beside, so - lon_ext - s0[:, None] - hl_e, inf)
         decision_s = w(decision == D_FOLLOW, np.minimum(gap_follow, gap_beside), w(
             decision == D_YIELD, stop_yield - s0[:, None], w(
                 decision == D_OVERTAKE, s_hi - s0[:, None], w(
