@@ -411,9 +411,19 @@ def road_friction(precipitation: np.ndarray) -> np.ndarray:
     return 0.9 - 0.5 * clip(precipitation, 0.0, 100.0) / 100.0
 
 
+#: lateral offset [m] reported for points too far from the reference line to project on it
+FAR_LATERAL_M = 1000.0
+
+
 def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Project points (any shape) on the ego reference line.
+
+    Points farther from the line than its grid reaches (about 12 m) have no nearest point; they
+    are projected on the tangent at the line's last point, as before, but their lateral offset
+    is FAR_LATERAL_M (with the projection's sign), so that no caller takes them for something
+    beside the path. Without this, on a curved route a vehicle on a road the ego never comes
+    near could project to a few metres beside the path just ahead.
 
     Returns:
         (index of the nearest reference point, arc length s [m], signed lateral offset [m],
@@ -422,13 +432,17 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     from rocas.sim.geometry import nearest_on
 
     idx, _ = nearest_on(road.ref_grid, x, y)
-    idx = np.minimum(idx, road.ref_points.shape[0] - 1)
+    last = road.ref_points.shape[0] - 1
+    far = idx > last
+    idx = np.minimum(idx, last)
     rx = road.ref_points[idx, 0]
     ry = road.ref_points[idx, 1]
     h = road.ref_heading[idx]
     c, s = np.cos(h), np.sin(h)
     dx, dy = x - rx, y - ry
-    return idx, idx * REF_SPACING_M + dx * c + dy * s, -dx * s + dy * c
+    lateral = -dx * s + dy * c
+    lateral = np.where(far, np.where(lateral < 0.0, -FAR_LATERAL_M, FAR_LATERAL_M), lateral)
+    return idx, idx * REF_SPACING_M + dx * c + dy * s, lateral
 
 
 def reference_at(road: RoadGeometry, s: np.ndarray
