@@ -52,6 +52,10 @@ def run(args: argparse.Namespace, env: Env) -> int:
     return 0
 
 
+def _num(v: float) -> str:
+    return f"{float(v):.3g}"
+
+
 def _mark(ok: bool) -> str:
     return "[green]✓[/green]" if ok else "[red]✗[/red]"
 
@@ -67,10 +71,13 @@ def render(res: dict, env: Env) -> None:
     for r in res["entries"]:
         e, f, m = r["expected"], r["found"], r["marks"]
         trig = f"{f['trigger_entity']}.{f['trigger_property']}" if f["trigger_entity"] else "—"
+        found = ", ".join(f"{c['parameter']} {_num(c['original'])} -> {_num(c['mutated'])}"
+                          for c in f["changes"]) or "—"
+        wanted = "; ".join(", ".join(f"{k} {_num(v)}" for k, v in fix.items())
+                           for fix in e["fixes"]) or "no fix"
         t.add_row(r["type"], trig,
                   f"{_mark(m['module'])} {f['deviating_module'] or '—'} ({e['deviating_module']})",
-                  f"{_mark(m['parameter'])} {', '.join(f['parameters']) or '—'} "
-                  f"({', '.join(e['parameters']) or 'no fix'})",
+                  f"{_mark(m['parameter'])} {found} ({wanted})",
                   f"{_mark(m['verdict'])} {f['verdict']}", f"{r['seconds']:.1f}")
     con.print(t)
     tb = res["time_breakdown"]

@@ -22,6 +22,7 @@ from rocas.pipeline.analyze import AnalyzeConfig, analyze
 def _expected(truth: Any) -> dict[str, Any]:
     return {"verdict": "misconfiguration" if truth.fixable else "no_configuration_fix",
             "deviating_module": truth.module, "parameters": list(truth.parameters),
+            "fixes": [dict(f) for f in truth.fixes],
             "trigger_entity": truth.trigger_entity, "trigger_property": truth.trigger_property}
 
 
@@ -30,15 +31,32 @@ def _found(report: dict[str, Any]) -> dict[str, Any]:
     props = [p["name"].rsplit(".", 1)[-1] for p in trig.get("properties", [])]
     return {"verdict": report["verdict"], "deviating_module": report["deviating_module"],
             "parameters": [m["parameter"] for m in report["misconfiguration"]],
+            "changes": [{"parameter": m["parameter"], "original": m["original"],
+                         "mutated": m["mutated"]} for m in report["misconfiguration"]],
             "trigger_entity": trig.get("entity"), "trigger_property": props[0] if props else None}
 
 
+def _same_way(expected_fixes: list[dict[str, float]], changes: list[dict[str, Any]]) -> bool:
+    """Whether some found change moves a documented fix's parameter the way that fix does
+    (up or down from the original value)."""
+    for ch in changes:
+        delta = float(ch["mutated"]) - float(ch["original"])
+        for fix in expected_fixes:
+            if ch["parameter"] in fix and delta * (fix[ch["parameter"]] - float(ch["original"])) > 0:
+                return True
+    return False
+
+
 def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool]:
-    """Hit marks per column: verdict, module, parameter (any documented parameter found),
-    and the overall hit (verdict and module, and parameter when a fix exists)."""
+    """Hit marks per column: verdict, module, parameter, and the overall hit (verdict and
+    module, and parameter when a fix exists).
+
+    The parameter counts when a found change moves a documented fix's parameter in the same
+    direction as that fix: a "fix" that lowers an overtake margin so the ego races ahead of the
+    truck avoids the replayed accident but is not the misconfiguration whose fix raises it."""
     verdict = expected["verdict"] == found["verdict"]
     module = expected["deviating_module"] == found["deviating_module"]
-    param = bool(set(expected["parameters"]) & set(found["parameters"])) \
+    param = _same_way(expected["fixes"], found["changes"]) \
         if expected["verdict"] == "misconfiguration" else not found["parameters"]
     return {"verdict": verdict, "module": module, "parameter": param,
             "hit": verdict and module and param}

@@ -31,13 +31,24 @@ def test_analyze_bad_input(rocas, tmp_path):
 
 def test_bench_scoring():
     exp = {"verdict": "misconfiguration", "deviating_module": "perception",
-           "parameters": ["perception.brake_threshold"]}
+           "parameters": ["perception.brake_threshold", "perception.fov_deg"],
+           "fixes": [{"perception.brake_threshold": 0.99}, {"perception.fov_deg": 60.0}]}
+    up = {"parameter": "perception.brake_threshold", "original": 0.8, "mutated": 0.855}
     hit = {"verdict": "misconfiguration", "deviating_module": "perception",
-           "parameters": ["perception.brake_threshold"]}
+           "parameters": ["perception.brake_threshold"], "changes": [up]}
     assert score(exp, hit)["hit"]
-    assert not score(exp, {**hit, "parameters": ["perception.fov_deg"]})["hit"]
+    # the documented parameter moved the other way is a different fix, not the misconfiguration
+    down = {**up, "mutated": 0.7}
+    assert not score(exp, {**hit, "changes": [down]})["hit"]
+    # an alternative counts, in its own direction (60 is below fov_deg's 90 here)
+    fov = {"parameter": "perception.fov_deg", "original": 90.0, "mutated": 75.0}
+    assert score(exp, {**hit, "parameters": ["perception.fov_deg"], "changes": [fov]})["hit"]
+    assert not score(exp, {**hit, "parameters": ["perception.fov_deg"],
+                           "changes": [{**fov, "mutated": 100.0}]})["hit"]
+    assert not score(exp, {**hit, "changes": [{**up, "parameter": "perception.max_range_m"}]})["hit"]
     assert not score(exp, {**hit, "deviating_module": "planning"})["hit"]
-    no_fix = {"verdict": "no_configuration_fix", "deviating_module": "perception", "parameters": []}
+    no_fix = {"verdict": "no_configuration_fix", "deviating_module": "perception", "parameters": [],
+              "fixes": [], "changes": []}
     assert score(no_fix, {**no_fix})["hit"]
 
 
