@@ -24,7 +24,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -79,8 +79,8 @@ class AnalyzeConfig:
         k_suspicion: K of f1 [m].
         h1_limit_m2: a fix may change the ego's trajectory before the accident by at most
             this MSE [m^2] (fixes beyond it count only when no other exists).
-        shrink_candidates: how many of the search's best fixes (distinct parameter sets) are
-            shrunk before the smallest is chosen.
+        shrink_candidates: how many of the search's best fixes (distinct parameter sets or
+            directions of change) are shrunk before one is chosen (see _smallest_fix).
     """
 
     seed: int = 0
@@ -396,7 +396,8 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
-    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates)
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates,
+                                 {v.name: float(v.original) for v in space.variables})
     evaluations = res.evaluations
     if candidates:
         # the search ranks fixes by the size it happened to try; each of the best few is shrunk
@@ -415,13 +416,21 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
         smalls, _ = shrink_all_magnitudes(smalls, space, holds)
         evaluations += scores.simulated
-        best, near = _smallest_fix([space.distance(m) for m in smalls], smalls)
+        unique = list(dict.fromkeys(smalls))
+        separation = dict(zip(unique, (r.outcome.min_separation_m for r in run_fixes(unique)),
+                              strict=True))
+        evaluations += len(unique)
+        originals = {v.name: float(v.original) for v in space.variables}
+        best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
+                                   separation=[separation[m] for m in smalls],
+                                   originals=originals)
         small, chosen = smalls[best], candidates[best]
         result["search_best"] = _cand_json(chosen)
         result["minimise_evaluations"] = scores.simulated
         result["shrunk_candidates"] = [
             {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
-             "h2": round(space.distance(m), 6)} for c, m in zip(candidates, smalls, strict=True)]
+             "h2": round(space.distance(m), 6), "min_separation_m": separation[m]}
+            for c, m in zip(candidates, smalls, strict=True)]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
 
         def described(m: Mutation) -> list[dict[str, Any]]:
@@ -445,19 +454,39 @@ ALTERNATIVE_H2_TOLERANCE = 0.05
 
 
 def _smallest_fix(h2: list[float], fixes: list[Mutation],
-                  tolerance: float = ALTERNATIVE_H2_TOLERANCE) -> tuple[int, list[int]]:
-    """Index of the smallest shrunk fix (h2, ties by parameter names), and the indices of the
-    fixes through other parameter sets within ``tolerance`` of it, smallest first: the same
-    margin expressed in another parameter, or a second suspect worth a look."""
+                  tolerance: float = ALTERNATIVE_H2_TOLERANCE,
+                  separation: list[float] | None = None,
+                  originals: Mapping[str, float] | None = None) -> tuple[int, list[int]]:
+    """Index of the chosen shrunk fix, and the indices of the other fixes (other parameter
+    sets, or the same parameters moved the other way) within ``tolerance`` of the smallest
+    h2, in order: the same margin expressed in another parameter, or a second suspect.
+
+    The smallest fix (h2, ties by parameter names) is chosen, unless another fix within
+    ``tolerance`` of it keeps the ego farther from everything (``separation``: the run's
+    smallest gap to any actor or object [m], 0.5 m more or better): such changes are
+    equally small, and the one that adds margin is the repair, not the one that avoids the
+    accident narrowly (an overtake margin lowered until the ego races ahead of the truck)."""
     order = sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names))
+    close = [i for i in order if h2[i] <= h2[order[0]] + tolerance]
     best = order[0]
-    seen = {fixes[best].names}
+    if separation is not None:
+        widest = max(close, key=lambda i: (separation[i], -h2[i]))
+        if separation[widest] >= separation[best] + SEPARATION_MARGIN_M:
+            best = widest
+    def kind(m: Mutation) -> Any:
+        return m.names if originals is None else _direction(m, originals)
+
+    seen = {kind(fixes[best])}
     near = []
-    for i in order[1:]:
-        if h2[i] <= h2[best] + tolerance and fixes[i].names not in seen:
-            seen.add(fixes[i].names)
+    for i in close:
+        if kind(fixes[i]) not in seen:
+            seen.add(kind(fixes[i]))
             near.append(i)
     return best, near
+
+
+#: how much wider [m] an equally small fix must keep the ego's smallest gap to be preferred
+SEPARATION_MARGIN_M = 0.5
 
 
 class _Scores:
@@ -500,10 +529,12 @@ def _first_fix_batch(res: SearchResult, h1_limit: float) -> int | None:
     return next((g.evaluations for g in res.generations if g.generation == gen), i)
 
 
-def _fix_candidates(res: SearchResult, h1_limit: float, count: int) -> list[Candidate]:
-    """The best ``count`` feasible fixes with distinct parameter sets: those that keep the ego's
-    earlier trajectory (h1 <= limit) by smallest change (h2); when none keeps it, the one
-    that changes it least."""
+def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
+                    originals: Mapping[str, float] | None = None) -> list[Candidate]:
+    """The best ``count`` feasible fixes with distinct parameter sets or directions (up or
+    down from ``originals``): those that keep the ego's earlier trajectory (h1 <= limit) by
+    smallest change (h2); when none keeps it, the one that changes it least."""
+    originals = originals or {}
     feasible = res.feasible
     if not feasible:
         return []
@@ -511,14 +542,22 @@ def _fix_candidates(res: SearchResult, h1_limit: float, count: int) -> list[Cand
     if not keep:
         return [min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))]
     out: list[Candidate] = []
-    seen: set[tuple[str, ...]] = set()
+    seen: set[tuple[tuple[str, int], ...]] = set()
     for c in sorted(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names)):
-        if c.mutation.names not in seen:
-            seen.add(c.mutation.names)
+        key = _direction(c.mutation, originals)
+        if key not in seen:
+            seen.add(key)
             out.append(c)
         if len(out) == count:
             break
     return out
+
+
+def _direction(m: Mutation, originals: Mapping[str, float]) -> tuple[tuple[str, int], ...]:
+    """A fix's parameters with the sign of each change: raising a margin and lowering it are
+    different fixes."""
+    return tuple((n, int(np.sign(float(m.values[n]) - float(originals[n]))) if n in originals
+                  else 0) for n in m.names)
 
 
 # -- phase V: validation ---------------------------------------------------------------------

@@ -62,6 +62,11 @@ def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory
     # when no fix keeps the trajectory, the one that changes it least is the only candidate
     far = SearchResult(candidates=[drift, cand({"planning.e": 1.0}, 3.0, 1.5)], front=[])
     assert [c.mutation.names for c in _fix_candidates(far, 1.0, 3)] == [("planning.e",)]
+    # raising a parameter and lowering it are different fixes when the originals are known
+    down = cand({"planning.a": 0.5}, 0.0, 1.22)
+    both = SearchResult(candidates=[a1, a2, b, down], front=[])
+    assert _fix_candidates(both, 1.0, 3) == [a2, b]  # without originals: one per set
+    assert _fix_candidates(both, 1.0, 3, {"planning.a": 1.5, "planning.b": 0.0}) == [a2, down, b]
 
 
 def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are_kept():
@@ -78,6 +83,27 @@ def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are
     assert _smallest_fix([1.2], [horizon]) == (0, [])
     # ties go to the parameter names, whatever the order the candidates came in
     assert _smallest_fix([1.1, 1.1], [horizon, dist])[0] == 1
+
+
+def test_an_equally_small_fix_that_keeps_the_ego_farther_away_wins():
+    from rocas.pipeline.analyze import _smallest_fix
+
+    # A3: lowering the overtake margin lets the ego race ahead of the truck (4.7 m gap);
+    # raising it makes the ego yield (6.9 m): as small a change, and the repair
+    race = Mutation({"planning.min_overtake_distance_m": 2.35})
+    yield_ = Mutation({"planning.min_overtake_distance_m": 3.91})
+    buf = Mutation({"planning.overtake_time_buffer_s": 0.91})
+    originals = {"planning.min_overtake_distance_m": 3.0, "planning.overtake_time_buffer_s": 1.0}
+    fixes = [buf, race, yield_]
+    best, near = _smallest_fix([1.018, 1.016, 1.023], fixes, separation=[4.7, 4.7, 6.9],
+                               originals=originals)
+    assert fixes[best] == yield_
+    assert [fixes[i] for i in near] == [race, buf]  # both directions are reported
+    # less than SEPARATION_MARGIN_M wider, or outside the h2 tolerance: the smallest stays
+    assert fixes[_smallest_fix([1.018, 1.016, 1.023], fixes, separation=[4.7, 4.7, 5.0],
+                               originals=originals)[0]] == race
+    assert fixes[_smallest_fix([1.018, 1.016, 1.2], fixes, separation=[4.7, 4.7, 6.9],
+                               originals=originals)[0]] == race
 
 
 def test_a_fix_is_known_only_when_its_whole_batch_has_run():
