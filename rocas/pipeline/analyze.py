@@ -429,7 +429,9 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         result["minimise_evaluations"] = scores.simulated
         result["shrunk_candidates"] = [
             {"search": _cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
-             "h2": round(space.distance(m), 6), "min_separation_m": separation[m]}
+             "h2": round(space.distance(m), 6),
+             # None when nothing was ever near (no actor or object): JSON has no infinity
+             "min_separation_m": separation[m] if np.isfinite(separation[m]) else None}
             for c, m in zip(candidates, smalls, strict=True)]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
 
@@ -473,6 +475,7 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
         widest = max(close, key=lambda i: (separation[i], -h2[i]))
         if separation[widest] >= separation[best] + SEPARATION_MARGIN_M:
             best = widest
+
     def kind(m: Mutation) -> Any:
         return m.names if originals is None else _direction(m, originals)
 

@@ -38,6 +38,9 @@ def test_report_has_the_documented_keys_and_files(serial_run):
     for name in ("state.json", "scenario.json", "accident.mcap", "report.json", "report.md"):
         assert (out / name).exists(), name
     assert json.loads((out / "report.json").read_text()) == report
+    # every JSON file of the run is standard JSON (no Infinity or NaN), for tools other than ours
+    for f in out.glob("*.json"):
+        json.loads(f.read_text(), parse_constant=lambda c: pytest.fail(f"{f.name}: {c}"))
     if report["triggering_entity"]:
         assert (out / "reference.mcap").exists() and (out / "diff.json").exists()
         assert report["evaluations"]["physical"] > 0
