@@ -88,3 +88,21 @@ def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):
     report = analyze(brown, tmp_path / "run", CFG, executor=SerialExecutor())
     assert report["verdict"] == "not_reproduced"
     assert report["triggering_entity"] is None and report["misconfiguration"] == []
+
+
+def test_resume_inside_the_cyber_search_gives_the_same_report(red_truck, tmp_path):
+    # a search resumed from its checkpoint, then the shrink and the choice among shrunk fixes
+    # (which uses the gaps to other road users the simulations measured) as without the stop
+    cfg = AnalyzeConfig(seed=1, budget=96, population=8, validation_variants=4)
+    whole = analyze(red_truck, tmp_path / "whole", cfg)
+    out = tmp_path / "run"
+
+    def stop_in_cyber(phase, info):
+        if phase == "cyber" and info.get("generation", 0) >= 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, out, cfg, progress=stop_in_cyber)
+    assert (out / "cyber.ckpt").exists()
+    resumed = analyze(red_truck, out, cfg, resume=True)
+    assert _stable(resumed) == _stable(whole)
