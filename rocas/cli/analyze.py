@@ -13,21 +13,28 @@ from rocas.cli.exit_codes import ExitStatus
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
 
 
+def add_search_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of an analysis that ``rocas bench`` passes on too (defaults as in
+    :class:`rocas.pipeline.analyze.AnalyzeConfig`)."""
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the searches, the validation variants and generated instances (default 0)")
+    p.add_argument("--budget", type=int, default=240, help="simulations per search phase (default 240)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--validation", type=int, default=200, metavar="K",
+                   help="perturbed variants in the regression test (default 200)")
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", metavar="ACCIDENT.mcap",
                    help="accident recording (or a scenario file / example name with --scenario)")
     p.add_argument("--scenario", action="store_true",
                    help="SOURCE is a scenario (file or example name) to simulate as the accident")
     p.add_argument("--out", metavar="RUN_DIR", help="run directory (default: runs/<name>)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--budget", type=int, default=240, help="simulations per search phase (default 240)")
+    add_search_arguments(p)
     p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
     p.add_argument("--scope", choices=("module", "all"), default="module",
                    help="cyber search over the deviating module (default) or every parameter")
     p.add_argument("--executor", default="local", help="where simulations run (default local)")
-    p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
-    p.add_argument("--validation", type=int, default=200, metavar="K",
-                   help="perturbed variants in the regression test (default 200)")
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object")

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from rocas.cli.analyze import add_search_arguments
 from rocas.cli.console import Env
 
 HELP = "run rocas analyze over the accident catalog and print Table 4 with hit/miss marks"
@@ -16,14 +17,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", default="runs/bench", help="where run directories go")
     p.add_argument("--recordings", metavar="DIR", default="recordings",
                    help="directory with the catalog recordings (default recordings/)")
-    p.add_argument("--budget", type=int, default=240,
-                   help="simulations per search phase of each analysis (default 240)")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of every analysis and of the generated instances (default 0)")
-    p.add_argument("--validation", type=int, default=200, metavar="K",
-                   help="perturbed variants in each validation (default 200)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker processes (default: all cores)")
+    add_search_arguments(p)
     p.add_argument("--compare-scope", type=int, default=3, metavar="N",
                    help="entries also analysed with --scope all (default 3)")
     p.add_argument("--instances", type=int, default=0, metavar="K",

@@ -91,3 +91,16 @@ def test_bench_prints_the_scope_ratio_from_when_the_first_fix_is_known():
     line = next(x for x in out.getvalue().splitlines() if x.startswith("a05"))
     assert "after 82 simulations" in line and "vs 246" in line and "3.0x" in line
     assert "position in its batch: 1 vs 6" in line
+
+
+def test_the_shared_search_options_default_to_the_analysis_defaults():
+    import argparse
+
+    from rocas.cli.analyze import add_search_arguments
+    from rocas.pipeline.analyze import AnalyzeConfig
+
+    p = argparse.ArgumentParser()
+    add_search_arguments(p)
+    args, cfg = p.parse_args([]), AnalyzeConfig()
+    assert (args.seed, args.budget, args.workers, args.validation) == \
+        (cfg.seed, cfg.budget, cfg.workers, cfg.validation_variants)
