@@ -82,7 +82,8 @@ def _fmt(v: Any) -> str:
 
 def change(item: dict[str, Any], arrow: str = "→") -> str:
     """"name original → mutated" for a triggering property or a misconfigured parameter."""
-    return f"{item.get('parameter', item.get('name'))} {_fmt(item['original'])} {arrow} {_fmt(item['mutated'])}"
+    name = item.get("parameter", item.get("name"))
+    return f"{name} {_fmt(item['original'])} {arrow} {_fmt(item['mutated'])}"
 
 
 def markdown(report: dict[str, Any]) -> str:
