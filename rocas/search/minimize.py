@@ -3,9 +3,10 @@
 Several fixes shrink in lockstep: every round of every fix goes into one batch, so a round
 costs one batch of simulations however many fixes and variables take part (a batch grows
 slowly with its size: ``tests/benchmarks/bench_sim.py`` printed 0.77 s for 1 run of a 30 s
-scenario, 0.92 s for 8 and 1.75 s for 64 on 2026-11-21, docs/benchmarks.md). The predicate is ``holds([(i, mutation), ...]) ->
-[bool]``, where ``i`` says which fix a trial belongs to (fixes may be accepted under different
-limits); the result depends only on ``holds``, not on how a batch is run.
+scenario, 0.92 s for 8 and 1.75 s for 64 on 2026-11-21, docs/benchmarks.md). The predicate
+is ``holds([(i, mutation), ...]) -> [bool]``, where ``i`` says which fix a trial belongs to
+(fixes may be accepted under different limits); the result depends only on ``holds``, not on
+how a batch is run.
 """
 
 from __future__ import annotations
