@@ -22,6 +22,9 @@ def add_search_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--validation", type=int, default=200, metavar="K",
                    help="perturbed variants in the regression test (default 200)")
+    p.add_argument("--no-screening", dest="screening", action="store_false",
+                   help="start the cyber search without trying each parameter alone first "
+                        "(the paper's plain genetic search)")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,7 +49,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, population=args.population, scope=args.scope,
                         executor=args.executor, workers=args.workers, delta_s=args.delta,
-                        validation_variants=args.validation)
+                        validation_variants=args.validation, screening=args.screening)
     if args.scenario:
         from rocas.scenarios import resolve_scenario
 

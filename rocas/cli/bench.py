@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 from rocas.cli.analyze import add_search_arguments
 from rocas.cli.console import Env
@@ -30,7 +31,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.pipeline.bench import run_bench
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
-                        validation_variants=args.validation)
+                        validation_variants=args.validation, screening=args.screening)
     try:
         res = run_bench(args.ids, Path(args.out), cfg, recordings=Path(args.recordings),
                         compare_scope=args.compare_scope, instances=args.instances,
@@ -80,15 +81,47 @@ def render(res: dict, env: Env) -> None:
     if res["search_space_reduction_mean"] is not None:
         con.print(f"Search space reduction: {100 * res['search_space_reduction_mean']:.1f} % "
                   "of the parameters (the paper: 85.8 %)")
-    for c in res["scope_comparison"]:
-        mo, al = c["module"], c["all"]
-        known_m, known_a = mo.get("first_fix_batch_evaluations"), al.get("first_fix_batch_evaluations")
-        ratio = known_a / known_m if known_a and known_m else None
-        con.print(f"{c['id']}: first fix known after {known_m or 'none'} simulations over "
-                  f"{mo['parameters']} parameters (--scope module) vs {known_a or 'none'} over "
-                  f"{al['parameters']} (--scope all)" + (f": {ratio:.1f}x" if ratio else "")
-                  + f" (the fix's position in its batch: {mo['first_fix_evaluation'] or '-'} vs "
-                  f"{al['first_fix_evaluation'] or '-'})")
+    if res["scope_comparison"]:
+        con.print(_scope_table(res["scope_comparison"]))
     for p in res["instances"]:
         con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")
+
+
+def _ratio(a: float | None, b: float | None) -> str:
+    return f"{a / b:.1f}x" if a and b else "—"
+
+
+def _scope_table(rows: list[dict]) -> Any:
+    """Simulations until the first fix was known, per scope and search; the cell also gives
+    the fix's position in its batch and marks whether the search ended on a documented fix's
+    parameter, moved that fix's way."""
+    from rich.table import Table
+
+    t = Table(title="Cyber search: simulations until the first fix is known (position in its batch); "
+                    "✓ = ended on a documented fix's parameter, moved its way")
+    t.add_column("id")
+    for search in ("screening", "plain GA"):
+        for scope in ("module", "all"):
+            t.add_column(f"{scope}, {search}", justify="right")
+        t.add_column("all / module", justify="right")
+    totals: dict[tuple[str, str], int] = {}
+    for c in rows:
+        cells = [c["id"]]
+        for key, runs in (("screening", c), ("plain", c["plain"])):
+            for scope in ("module", "all"):
+                r = runs[scope]
+                n = r["first_fix_batch_evaluations"]
+                if n is not None:
+                    totals[(key, scope)] = totals.get((key, scope), 0) + n
+                cells.append(f"{n if n is not None else 'none'} ({r['first_fix_evaluation'] or '-'}) "
+                             f"{_mark(r['parameter_hit'])}")
+            cells.append(_ratio(runs["all"]["first_fix_batch_evaluations"],
+                                runs["module"]["first_fix_batch_evaluations"]))
+        t.add_row(*cells)
+    t.add_row("total", str(totals.get(("screening", "module"), "—")),
+              str(totals.get(("screening", "all"), "—")),
+              _ratio(totals.get(("screening", "all")), totals.get(("screening", "module"))),
+              str(totals.get(("plain", "module"), "—")), str(totals.get(("plain", "all"), "—")),
+              _ratio(totals.get(("plain", "all")), totals.get(("plain", "module"))))
+    return t

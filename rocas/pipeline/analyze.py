@@ -81,6 +81,9 @@ class AnalyzeConfig:
             this MSE [m^2] (fixes beyond it count only when no other exists).
         shrink_candidates: how many of the search's best fixes (distinct parameter sets or
             directions of change) are shrunk before one is chosen (see _smallest_fix).
+        screening: start the cyber search by trying every parameter alone at both ends of its
+            range (two simulations per parameter, out of the budget); False runs the paper's
+            plain genetic search from a population half single-parameter mutants, half random.
     """
 
     seed: int = 0
@@ -95,6 +98,7 @@ class AnalyzeConfig:
     k_suspicion: float = 10.0
     h1_limit_m2: float = 1.0
     shrink_candidates: int = 3
+    screening: bool = True
 
     def __post_init__(self) -> None:
         if self.scope not in ("module", "all"):
@@ -107,9 +111,9 @@ class AnalyzeConfig:
             raise UsageError("shrink_candidates must be at least 1")
 
     def search(self, stage: int, n_vars: int = 0) -> SearchConfig:
-        """Stage 1: physical (single-property seeds). Stage 2: cyber (screening first, which
-        costs two simulations per parameter out of the budget)."""
-        screen = stage == 2
+        """Stage 1: physical (single-property seeds). Stage 2: cyber (screening first, unless
+        switched off, which costs two simulations per parameter out of the budget)."""
+        screen = stage == 2 and self.screening
         left = self.budget - (2 * n_vars if screen else 0)
         return SearchConfig(population=self.population,
                             generations=max(1, left // self.population),
@@ -191,7 +195,9 @@ def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig) ->
             raise UsageError(f"run directory {out} already holds an analysis",
                              "continue it with --resume, or choose another --out")
         state = json.loads(state_path.read_text())
-        if state.get("source") != source or state.get("config") != config:
+        # a setting added after the run was started has its default, which is what that run used
+        defaults = {k: getattr(AnalyzeConfig(), k) for k in config}
+        if state.get("source") != source or {**defaults, **state.get("config", {})} != config:
             raise UsageError(f"run directory {out} holds an analysis of other inputs or settings",
                              "choose another --out, or resume with the same input and options")
         return state

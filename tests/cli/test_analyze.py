@@ -80,17 +80,23 @@ def test_bench_prints_the_scope_ratio_from_when_the_first_fix_is_known():
     from rocas.cli.bench import render
     from rocas.cli.console import Env
 
-    side = {"first_fix_evaluation": 1, "first_fix_batch_evaluations": 82, "parameters": 42}
+    side = {"first_fix_evaluation": 1, "first_fix_batch_evaluations": 82, "parameters": 42,
+            "parameter_hit": True}
+    plain = {"module": {**side, "first_fix_evaluation": 3, "first_fix_batch_evaluations": 24,
+                        "parameter_hit": False},
+             "all": {**side, "first_fix_evaluation": 13, "first_fix_batch_evaluations": 48,
+                     "parameters": 129, "parameter_hit": False}}
     res = {"hits": 0, "total": 0, "entries": [], "time_breakdown": {"cyber": 1.0},
            "time_total_s": 1.0, "search_space_reduction_mean": None, "instances": [],
            "scope_comparison": [{"id": "a05", "module": side, "all": {
                **side, "first_fix_evaluation": 6, "first_fix_batch_evaluations": 246,
-               "parameters": 129}}]}
+               "parameters": 129, "parameter_hit": False}, "plain": plain}]}
     out = io.StringIO()
     render(res, Env(stdout=out, stderr=io.StringIO()))
-    line = next(x for x in out.getvalue().splitlines() if x.startswith("a05"))
-    assert "after 82 simulations" in line and "vs 246" in line and "3.0x" in line
-    assert "position in its batch: 1 vs 6" in line
+    row = next(x for x in out.getvalue().splitlines() if "a05" in x)
+    cells = [c.strip() for c in row.strip("│ ").split("│")]
+    # batch-known counts (positions), a hit mark each, and the all/module ratio per search
+    assert cells == ["a05", "82 (1) ✓", "246 (6) ✗", "3.0x", "24 (3) ✗", "48 (13) ✗", "2.0x"]
 
 
 def test_the_shared_search_options_default_to_the_analysis_defaults():
@@ -102,5 +108,5 @@ def test_the_shared_search_options_default_to_the_analysis_defaults():
     p = argparse.ArgumentParser()
     add_search_arguments(p)
     args, cfg = p.parse_args([]), AnalyzeConfig()
-    assert (args.seed, args.budget, args.workers, args.validation) == \
-        (cfg.seed, cfg.budget, cfg.workers, cfg.validation_variants)
+    assert (args.seed, args.budget, args.workers, args.validation, args.screening) == \
+        (cfg.seed, cfg.budget, cfg.workers, cfg.validation_variants, cfg.screening)

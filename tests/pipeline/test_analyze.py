@@ -2,6 +2,7 @@
 accuracy over the catalog is measured by `rocas bench`)."""
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -81,6 +82,35 @@ def test_an_existing_run_dir_needs_resume(red_truck, serial_run):
     with pytest.raises(UsageError, match="other inputs or settings"):
         analyze(red_truck, out, AnalyzeConfig(seed=2, budget=16, population=8), resume=True,
                 executor=SerialExecutor())
+
+
+def test_a_run_dir_from_before_a_setting_existed_resumes_with_its_default(red_truck, serial_run,
+                                                                        tmp_path):
+    import shutil
+
+    src, serial = serial_run
+    out = tmp_path / "run"
+    shutil.copytree(src, out)
+    state = json.loads((out / "state.json").read_text())
+    del state["config"]["screening"]  # as written before the setting was added
+    (out / "state.json").write_text(json.dumps(state))
+    assert _stable(analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)) == _stable(serial)
+    with pytest.raises(UsageError, match="other inputs or settings"):
+        analyze(red_truck, out, replace(CFG, screening=False), executor=SerialExecutor(), resume=True)
+
+
+def test_without_screening_the_cyber_search_starts_at_its_first_generation(red_truck, serial_run,
+                                                                          tmp_path):
+    screened, _ = serial_run
+    out = tmp_path / "run"
+    analyze(red_truck, out, replace(CFG, screening=False), executor=SerialExecutor())
+    plain = json.loads((out / "cyber.json").read_text())["generations"]
+    first = json.loads((screened / "cyber.json").read_text())["generations"][0]
+    # screening is generation 0: each parameter of the module alone at the ends of its range
+    # (an end that is the parameter's current value is not simulated)
+    n = json.loads((screened / "cyber.json").read_text())["parameters"]
+    assert first["generation"] == 0 and n < first["evaluations"] <= 2 * n
+    assert plain[0]["generation"] == 1 and plain[0]["evaluations"] <= CFG.population
 
 
 def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):

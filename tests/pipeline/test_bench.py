@@ -1,0 +1,38 @@
+"""rocas bench end to end on one catalog entry (small budgets: the machinery, not accuracy)."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rocas.pipeline import AnalyzeConfig
+from rocas.pipeline.bench import run_bench
+
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
+
+
+@pytest.mark.slow  # four analyses, two of them screening all 129 parameters (about 40 s)
+def test_bench_scores_an_entry_and_compares_scopes_and_searches(tmp_path):
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=2)
+    res = run_bench(["A9"], tmp_path, cfg, recordings=RECORDINGS, compare_scope=1)
+    (row,) = res["entries"]
+    assert row["id"] == "a09" and row["expected"]["deviating_module"] == "perception"
+    marks = row["marks"]
+    assert row["hit"] == (marks["verdict"] and marks["module"] and marks["parameter"])
+    (cmp,) = res["scope_comparison"]
+    runs = {"module": cmp["module"], "all": cmp["all"], "plain module": cmp["plain"]["module"],
+            "plain all": cmp["plain"]["all"]}
+    assert runs["all"]["parameters"] == runs["plain all"]["parameters"] > runs["module"]["parameters"]
+    assert runs["plain module"]["parameters"] == runs["module"]["parameters"]
+    assert all(isinstance(r["parameter_hit"], bool) for r in runs.values())
+    # the module run is the scored entry itself; the other three have their own run directories,
+    # and only the screening searches start with the two-ends-of-every-parameter generation 0
+    assert runs["module"]["found"] == row["found"]["parameters"]
+    assert runs["module"]["parameter_hit"] == marks["parameter"]
+    for name, screened in (("a09_red_truck_roundabout.all", True),
+                           ("a09_red_truck_roundabout.module.plain", False),
+                           ("a09_red_truck_roundabout.all.plain", False)):
+        cyber = json.loads((tmp_path / name / "cyber.json").read_text())
+        first = cyber["generations"][0]["generation"]
+        assert (first == 0) == screened, name
+        assert cyber["scope"] == ("all" if ".all" in name else "module")
