@@ -45,7 +45,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.pipeline.analyze import AnalyzeConfig, analyze
+    from rocas.pipeline.analyze import AnalyzeConfig, analyze, validation_simulations
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, population=args.population, scope=args.scope,
                         executor=args.executor, workers=args.workers, delta_s=args.delta,
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         name = source.stem
     out = Path(args.out) if args.out else Path("runs") / name
     progress = _Progress(env, {"physical": cfg.budget, "cyber": cfg.budget,
-                               "validation": 2 * cfg.validation_variants})
+                               "validation": validation_simulations(cfg.validation_variants)})
     try:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress)
@@ -145,7 +145,9 @@ class _Progress:
                            info=f"gen {info['generation']}, feasible {info['feasible']}")
         else:
             if phase == "validation" and "variants" in info:
-                self._done[phase] = 2 * info["variants"]
+                from rocas.pipeline.analyze import validation_simulations
+
+                self._done[phase] = validation_simulations(info["variants"])
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 
@@ -154,7 +156,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rich.panel import Panel
     from rich.table import Table
 
-    from rocas.pipeline.report import change
+    from rocas.pipeline.report import change, robust_text
 
     con = env.out()
     t = Table(show_header=False, box=None, padding=(0, 1))
@@ -182,6 +184,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         t.add_row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
                   f"(original) vs {fixed:.0f} % (fixed)"
                   + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else ""))
+        t.add_row("robust value", robust_text(report, "->"))
     ss = report["search_space"]
     if ss["parameters_searched"]:
         t.add_row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "

@@ -34,7 +34,8 @@ def _found(report: dict[str, Any]) -> dict[str, Any]:
             "parameters": [m["parameter"] for m in report["misconfiguration"]],
             "changes": [{"parameter": m["parameter"], "original": m["original"],
                          "mutated": m["mutated"]} for m in report["misconfiguration"]],
-            "trigger_entity": trig.get("entity"), "trigger_property": props[0] if props else None}
+            "trigger_entity": trig.get("entity"), "trigger_property": props[0] if props else None,
+            "robust": ((report.get("validation") or {}).get("robust_fix") or {}).get("fix")}
 
 
 def _same_way(expected_fixes: list[dict[str, float]], changes: list[dict[str, Any]]) -> bool:

@@ -86,6 +86,20 @@ def change(item: dict[str, Any], arrow: str = "→") -> str:
     return f"{name} {_fmt(item['original'])} {arrow} {_fmt(item['mutated'])}"
 
 
+def robust_text(report: dict[str, Any], arrow: str = "→") -> str:
+    """The validation's robust value in words: the fix moved further the same way until it
+    avoids clearly more of the perturbed variants (or why there is none)."""
+    v = report.get("validation") or {}
+    rob = v.get("robust_fix")
+    if rob is None:
+        return ("none: no stronger value avoids clearly more variants than the minimal fix"
+                if v.get("stronger") else "not tried")
+    originals = {m["parameter"]: m["original"] for m in report["misconfiguration"]}
+    values = ", ".join(change({"parameter": k, "original": originals.get(k, "?"), "mutated": x}, arrow)
+                       for k, x in rob["fix"].items())
+    return f"{values}: accident-free in {100 * rob['success_rate']:.0f} % of the variants"
+
+
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
@@ -112,6 +126,7 @@ def markdown(report: dict[str, Any]) -> str:
                      f"{100 * v['success_rate_original']:.0f} % with the original configuration, "
                      f"{100 * v['success_rate_fixed']:.0f} % with the fix"
                      + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else ""))
+        lines.append(f"- **Robust value**: {robust_text(report)}")
     t = report["timings_s"]
     lines.append("- **Time**: " + ", ".join(f"{k} {s:.1f} s" for k, s in t.items()))
     lines.append("- **Simulations**: " + ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))

@@ -70,7 +70,8 @@ def test_progress_bars_finish_each_phase_when_the_next_starts():
         p("validation", {"variants": 4})
     tasks = {t.description: t for t in p._p.tasks}
     assert all(t.finished for t in tasks.values())
-    assert tasks["validation"].fields["count"] == "8 sims" and tasks["diff"].fields["count"] == "done"
+    # 4 variants with the original and the minimal fix, 5 stronger values on the accident and the 4
+    assert tasks["validation"].fields["count"] == "33 sims" and tasks["diff"].fields["count"] == "done"
     assert "0/?" not in err.getvalue()
 
 

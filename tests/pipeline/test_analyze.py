@@ -8,6 +8,7 @@ import pytest
 
 from rocas.errors import UsageError
 from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
+from rocas.pipeline.analyze import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
 from rocas.search import LocalExecutor, SerialExecutor
 
@@ -48,6 +49,13 @@ def test_report_has_the_documented_keys_and_files(serial_run):
     if report["triggering_entity"]:
         assert (out / "reference.mcap").exists() and (out / "diff.json").exists()
         assert report["evaluations"]["physical"] > 0
+    if report["verdict"] == "misconfiguration":
+        v = report["validation"]
+        assert [s["fraction"] for s in v["stronger"]] == list(STRONGER_FRACTIONS)
+        assert report["evaluations"]["validation"] == validation_simulations(CFG.validation_variants)
+        rob = v["robust_fix"]
+        assert rob is None or rob["success_rate"] >= v["success_rate_fixed"] + ROBUST_TOLERANCE
+        assert "**Robust value**" in (out / "report.md").read_text()
 
 
 def test_same_result_whatever_the_executor(red_truck, serial_run, tmp_path):

@@ -1,0 +1,61 @@
+"""Phase V beyond the paper's regression test: the fix moved further the same way, and the
+robust value chosen from those stronger values."""
+
+import pytest
+
+from rocas.pipeline.analyze import (
+    ROBUST_TOLERANCE,
+    STRONGER_FRACTIONS,
+    _robust,
+    stronger_fixes,
+    validation_simulations,
+)
+from rocas.pipeline.cyber import cyber_space
+
+
+def test_stronger_values_go_on_the_way_the_fix_went_to_the_end_of_the_range():
+    space = cyber_space("perception", {})
+    # brake_threshold: 0.8 by default, range 0.05-0.99, the fix raised it; track_max_missed_frames
+    # is an integer parameter (range 0-20, default 3), the fix raised it to 5
+    out = stronger_fixes({"perception.brake_threshold": 0.85, "perception.track_max_missed_frames": 5.0},
+                         space)
+    assert [f for f, _ in out] == list(STRONGER_FRACTIONS)
+    up = [v["perception.brake_threshold"] for _, v in out]
+    assert up == pytest.approx([0.85 + f * (0.99 - 0.85) for f in STRONGER_FRACTIONS])
+    assert up[-1] == pytest.approx(0.99)
+    frames = [v["perception.track_max_missed_frames"] for _, v in out]
+    assert frames == [7.0, 9.0, 12.0, 16.0, 20.0]  # 5 + f * 15, rounded
+    # a fix that lowered a parameter (tl_facing_tolerance_deg 40 -> 30; range 5-90) goes on down
+    (_, first), *_, (_, last) = stronger_fixes({"perception.tl_facing_tolerance_deg": 30.0}, space)
+    assert first["perception.tl_facing_tolerance_deg"] == pytest.approx(30.0 - 0.125 * 25.0)
+    assert last["perception.tl_facing_tolerance_deg"] == pytest.approx(5.0)
+
+
+def test_phase_v_simulation_count():
+    assert validation_simulations(200) == 400 + len(STRONGER_FRACTIONS) * 201
+    assert validation_simulations(0) == len(STRONGER_FRACTIONS)
+
+
+def _sweep(*rates, avoids=None, h1=None):
+    return [{"fraction": f, "fix": {"p": f}, "success_rate": r,
+             "avoids_accident": True if avoids is None else avoids[k],
+             "h1_m2": 0.0 if h1 is None else h1[k]}
+            for k, (f, r) in enumerate(zip(STRONGER_FRACTIONS, rates, strict=True))]
+
+
+def test_the_robust_value_is_the_closest_within_the_tolerance_of_the_best():
+    # best 1.0: the first value at 0.95 or above is the one (fraction 0.25), not the best itself
+    rob = _robust(0.60, _sweep(0.835, 0.96, 1.0, 1.0, 1.0), h1_limit=1.0)
+    assert rob == {"fix": {"p": 0.25}, "success_rate": 0.96, "fraction": 0.25}
+
+
+def test_no_robust_value_when_no_stronger_value_avoids_clearly_more():
+    assert _robust(0.135, _sweep(0.14, 0.15, 0.155, 0.16, 0.135 + ROBUST_TOLERANCE - 0.01),
+                   h1_limit=1.0) is None
+    assert _robust(None, [], h1_limit=1.0) is None
+
+
+def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not_count():
+    rob = _robust(0.5, _sweep(0.9, 0.95, 1.0, 1.0, 1.0, avoids=[False, True, True, True, True],
+                              h1=[0.0, 2.0, 0.5, 0.5, 0.5]), h1_limit=1.0)
+    assert rob is not None and rob["fraction"] == 0.5
