@@ -69,7 +69,7 @@ def render(res: dict, env: Env) -> None:
         found = ", ".join(f"{c['parameter']} {_num(c['original'])} -> {_num(c['mutated'])}"
                           for c in f["changes"]) or "—"
         if f.get("robust"):
-            found += " [robust " + ", ".join(_num(v) for v in f["robust"].values()) + "]"
+            found += ", robust " + ", ".join(_num(v) for v in f["robust"].values())
         wanted = "; ".join(", ".join(f"{k} {_num(v)}" for k, v in fix.items())
                            for fix in e["fixes"]) or "no fix"
         t.add_row(r["type"], trig,

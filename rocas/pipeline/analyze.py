@@ -608,8 +608,8 @@ ROBUST_TOLERANCE = 0.05
 
 def validation_simulations(variants: int) -> int:
     """Simulations of phase V: the variants with the original and the minimal fix, then each
-    stronger value on the accident itself and on every variant."""
-    return 2 * variants + len(STRONGER_FRACTIONS) * (variants + 1)
+    stronger value on the accident itself and on every variant (none without variants)."""
+    return 2 * variants + len(STRONGER_FRACTIONS) * (variants + 1) if variants else 0
 
 
 def stronger_fixes(fix: Mapping[str, float], space: MutationSpace

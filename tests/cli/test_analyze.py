@@ -100,6 +100,27 @@ def test_bench_prints_the_scope_ratio_from_when_the_first_fix_is_known():
     assert cells == ["a05", "82 (1) ✓", "246 (6) ✗", "3.0x", "24 (3) ✗", "48 (13) ✗", "2.0x"]
 
 
+def test_bench_shows_the_robust_value_beside_the_minimal_fix():
+    import io
+
+    from rocas.cli.bench import render
+    from rocas.cli.console import Env
+
+    found = {"verdict": "misconfiguration", "deviating_module": "perception", "trigger_entity": None,
+             "trigger_property": None, "parameters": ["perception.brake_threshold"],
+             "changes": [{"parameter": "perception.brake_threshold", "original": 0.8, "mutated": 0.855}],
+             "robust": {"perception.brake_threshold": 0.8887}}
+    row = {"type": "A9", "expected": {"deviating_module": "perception",
+                                      "fixes": [{"perception.brake_threshold": 0.99}]},
+           "found": found, "marks": {"module": True, "parameter": True, "verdict": True}, "seconds": 1.0}
+    res = {"hits": 1, "total": 1, "entries": [row], "time_breakdown": {"cyber": 1.0},
+           "time_total_s": 1.0, "search_space_reduction_mean": None, "instances": [],
+           "scope_comparison": []}
+    out = io.StringIO()
+    render(res, Env(stdout=out, stderr=io.StringIO()))
+    assert "robust 0.889" in out.getvalue()
+
+
 def test_the_shared_search_options_default_to_the_analysis_defaults():
     import argparse
 

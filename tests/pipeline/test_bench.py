@@ -36,3 +36,6 @@ def test_bench_scores_an_entry_and_compares_scopes_and_searches(tmp_path):
         first = cyber["generations"][0]["generation"]
         assert (first == 0) == screened, name
         assert cyber["scope"] == ("all" if ".all" in name else "module")
+        # the comparison is about the cyber search: its runs skip the validation
+        state = json.loads((tmp_path / name / "state.json").read_text())
+        assert state["evaluations"].get("validation", 0) == 0
