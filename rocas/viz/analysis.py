@@ -7,6 +7,9 @@ Entity layout::
     diff/...                    the differential analysis (rocas.viz.diff), on ``time`` and
                                 ``sim_time``
     search/<phase>/...          search progress (rocas.viz.search), timeline ``generation``
+    validation/...              phase V (static): accident-free share of the perturbed variants
+                                for the original, the minimal fix and each stronger value, and a
+                                table of them with the robust value marked
     verdict                     the report as a markdown document
 
 The default blueprint shows the scene (one tab per execution), the module signals, the MDR
@@ -33,6 +36,7 @@ if TYPE_CHECKING:
 
 EXECUTIONS = ("accident", "reference", "fixed")
 VERDICT_ENTITY = "verdict"
+VALIDATION_ENTITY = "validation"
 RUN_FILES = (
     "accident.mcap",
     "reference.mcap",
@@ -50,6 +54,45 @@ def log_verdict(rec: Any, markdown: str, entity: str = VERDICT_ENTITY) -> None:
     import rerun as rr
 
     rec.log(entity, rr.TextDocument(markdown, media_type="text/markdown"), static=True)
+
+
+def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str = VALIDATION_ENTITY
+                   ) -> bool:
+    """Log phase V (the ``validation`` object of report.json) as static bar charts and a table.
+
+    ``<entity>/original`` is one bar at x = -0.125, ``<entity>/fix`` the minimal fix at x = 0 and
+    the stronger values at their fraction of the way to the range's end (x = 0.125 ... 1), all in
+    % of the variants that stay accident-free; ``<entity>/summary`` is the table. Returns False
+    (and logs nothing) when there was no validation.
+    """
+    import numpy as np
+    import rerun as rr
+
+    if not validation or not validation.get("variants"):
+        return False
+    stronger = list(validation.get("stronger") or [])
+    rec.log(f"{entity}/original",
+            rr.BarChart([100 * validation["success_rate_original"]], abscissa=[-0.125], widths=[0.1],
+                        color=(220, 50, 47)), static=True)
+    xs = [0.0] + [float(s["fraction"]) for s in stronger]
+    ys = [100 * validation["success_rate_fixed"]] + [100 * s["success_rate"] for s in stronger]
+    rec.log(f"{entity}/fix", rr.BarChart(np.asarray(ys), abscissa=np.asarray(xs),
+                                         widths=[0.1] * len(xs), color=(40, 170, 80)), static=True)
+    robust = (validation.get("robust_fix") or {}).get("fraction")
+    rows = ["| configuration | values | accident-free | avoids this accident | h1 [m^2] |",
+            "|---|---|---|---|---|",
+            f"| original | | {100 * validation['success_rate_original']:.1f} % | no | |",
+            f"| minimal fix | | {100 * validation['success_rate_fixed']:.1f} % | yes | |"]
+    for st in stronger:
+        values = ", ".join(f"{k} = {v:.4g}" for k, v in st["fix"].items())
+        mark = " **(robust value)**" if st["fraction"] == robust else ""
+        rows.append(f"| {st['fraction']:g} of the way to the range end{mark} | {values} | "
+                    f"{100 * st['success_rate']:.1f} % | {'yes' if st['avoids_accident'] else 'no'} | "
+                    f"{st['h1_m2']:.3g} |")
+    text = (f"# Validation\n\n{validation['variants']} perturbed variants, each run with every "
+            "configuration below.\n\n" + "\n".join(rows) + "\n")
+    rec.log(f"{entity}/summary", rr.TextDocument(text, media_type="text/markdown"), static=True)
+    return True
 
 
 def log_execution(
@@ -140,6 +183,7 @@ def analysis_blueprint(
     verdict: bool = True,
     brake: bool = True,
     focus: Execution | None = None,
+    validation: bool = False,
 ) -> Any:
     """The default layout: scene + signals left; MDR, CMG and verdict (+ searches) right.
 
@@ -182,6 +226,9 @@ def analysis_blueprint(
         bottom.append(
             rrb.TextDocumentView(origin=f"search/{phase}/summary", name=f"{phase.capitalize()} table")
         )
+    if validation:
+        bottom.append(rrb.BarChartView(origin=VALIDATION_ENTITY, name="Validation"))
+        bottom.append(rrb.TextDocumentView(origin=f"{VALIDATION_ENTITY}/summary", name="Validation table"))
     if bottom:
         right_parts.append(rrb.Tabs(*bottom, active_tab=0) if len(bottom) > 1 else bottom[0])
     layout = rrb.Horizontal(left, rrb.Vertical(*right_parts), column_shares=[3, 2]) if right_parts else left
@@ -295,7 +342,8 @@ def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
 
     Keys (only for the files that exist): ``accident``, ``reference``, ``fixed`` (paths),
     ``diff`` (the diff JSON), ``searches`` (phase -> generations), ``verdict_md``,
-    ``report`` (report.json), ``highlight`` (mutated entity ids from physical.json).
+    ``report`` (report.json), ``validation`` (its phase V object, when variants ran),
+    ``highlight`` (mutated entity ids from physical.json).
     """
     from rocas.viz.search import generations_from_json
 
@@ -319,6 +367,8 @@ def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
         out["verdict_md"] = (d / "report.md").read_text()
     if (d / "report.json").is_file():
         out["report"] = _read_json(d / "report.json")
+        if (out["report"].get("validation") or {}).get("variants"):
+            out["validation"] = out["report"]["validation"]
     if "accident" not in out:
         raise InputError(f"{d}: no accident.mcap", hint="is this a directory written by rocas analyze?")
     return out
@@ -366,6 +416,7 @@ def _log_contents(rec: Any, c: dict[str, Any]) -> None:
         _log_diff_json(rec, c["diff"])
     for phase, gens in c["searches"].items():
         log_search(rec, phase, gens)
+    log_validation(rec, c.get("validation"))
     if "verdict_md" in c:
         log_verdict(rec, c["verdict_md"])
 
@@ -407,6 +458,7 @@ def write_run_dir_rrd(path: str | os.PathLike[str], run_dir: str | os.PathLike[s
         verdict="verdict_md" in c,
         brake=any(_has_brake(c[n]) for n in names),
         focus=c["accident"],
+        validation="validation" in c,
     )
     with rrd_recording(path, bp, recording_id="rocas-analysis") as rec:
         _log_contents(rec, c)
@@ -417,6 +469,7 @@ __all__ = [
     "analysis_blueprint",
     "log_execution",
     "log_run_dir",
+    "log_validation",
     "log_verdict",
     "recording_blueprint",
     "run_dir_contents",

@@ -131,6 +131,32 @@ def test_run_dir_shows_what_exists(pair, tmp_path):
     assert e["/executions/reference/actors/highlight"].rows > 0
 
 
+def test_run_dir_shows_the_validation_sweep(pair, tmp_path):
+    run = _run_dir(pair, tmp_path)
+    stronger = [{"fraction": f, "fix": {"perception.brake_threshold": 0.86 + 0.13 * f},
+                 "avoids_accident": True, "h1_m2": 0.0, "success_rate": r}
+                for f, r in ((0.125, 0.835), (0.25, 0.96), (0.5, 1.0), (0.75, 1.0), (1.0, 1.0))]
+    validation = {"variants": 200, "success_rate_original": 0.0, "success_rate_fixed": 0.6,
+                  "fix_makes_it_worse": False, "stronger": stronger,
+                  "robust_fix": {"fix": stronger[1]["fix"], "success_rate": 0.96, "fraction": 0.25}}
+    (run / "report.json").write_text(json.dumps({"validation": validation}))
+    out = tmp_path / "run.rrd"
+    contents = write_run_dir_rrd(out, run)
+    assert contents["validation"] == validation
+    e, _ = read_rrd(out)
+    assert e["/validation/original"].static_rows == 1 and e["/validation/fix"].static_rows == 1
+    assert e["/validation/summary"].static_rows == 1
+
+
+def test_run_dir_without_a_validation_logs_none(pair, tmp_path):
+    run = _run_dir(pair, tmp_path)
+    (run / "report.json").write_text(json.dumps({"validation": {"variants": 0}}))
+    out = tmp_path / "run.rrd"
+    assert "validation" not in write_run_dir_rrd(out, run)
+    e, _ = read_rrd(out)
+    assert not any(k.startswith("/validation") for k in e)
+
+
 def test_run_dir_without_reference_logs_the_diff_json(pair, tmp_path):
     run = _run_dir(pair, tmp_path, reference=False)
     out = tmp_path / "partial.rrd"
