@@ -622,8 +622,10 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
         values = {}
         for name, x in fix.items():
             var = space.variable(name)
-            end = var.high if x > float(var.original) else var.low
-            v = x + f * (float(end) - x)  # type: ignore[arg-type]
+            lo, hi = float(var.low), float(var.high)  # type: ignore[arg-type]
+            end = hi if x > float(var.original) else lo
+            # x + f * (end - x) can land a rounding error outside the range, which the ADS refuses
+            v = min(max(x + f * (end - x), lo), hi)
             values[name] = float(round(v)) if var.kind == "int" else v
         out.append((f, values))
     return out

@@ -31,6 +31,17 @@ def test_stronger_values_go_on_the_way_the_fix_went_to_the_end_of_the_range():
     assert last["perception.tl_facing_tolerance_deg"] == pytest.approx(5.0)
 
 
+def test_stronger_values_stay_inside_the_range_despite_rounding():
+    # 6.405920704482398 + 1.0 * (0.1 - 6.405920704482398) is 0.09999999999999964 in floating
+    # point, which the ADS refuses as out of range [0.1, 10] (a generated A3 instance hit it)
+    space = cyber_space("prediction", {"prediction.accel_decay_s": 8.0})  # the fix lowered it
+    out = stronger_fixes({"prediction.accel_decay_s": 6.405920704482398}, space)
+    var = space.variable("prediction.accel_decay_s")
+    assert var.low == 0.1
+    assert all(var.low <= v["prediction.accel_decay_s"] <= var.high for _, v in out)
+    assert out[-1][1]["prediction.accel_decay_s"] == 0.1
+
+
 def test_phase_v_simulation_count():
     assert validation_simulations(200) == 400 + len(STRONGER_FRACTIONS) * 201
     assert validation_simulations(0) == 0  # --validation 0: no regression test, no sweep
