@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +12,8 @@ from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
+#: the objective a search's progress bar reports the best accident-free value of (see _gen_info)
+BEST_LABELS = {"physical": "f2", "cyber": "h2"}
 
 
 def add_search_arguments(p: argparse.ArgumentParser) -> None:
@@ -112,6 +115,7 @@ class _Progress:
                            TimeElapsedColumn(), console=env.err(), transient=False)
         self._tasks: dict[str, Any] = {}
         self._done: dict[str, int] = {}  # phase -> simulations counted so far
+        self._best: dict[str, float] = {}  # phase -> best accident-free objective so far
 
     def __enter__(self) -> _Progress:
         self._p.__enter__()
@@ -141,8 +145,12 @@ class _Progress:
         if "generation" in info:
             n = info["evaluations"]
             self._done[phase] = n
-            self._p.update(task, completed=n, count=f"{n}/{self._totals.get(phase, '?')}",
-                           info=f"gen {info['generation']}, feasible {info['feasible']}")
+            text = f"gen {info['generation']}, feasible {info['feasible']}"
+            if info.get("best_feasible") is not None:
+                self._best[phase] = min(self._best.get(phase, math.inf), info["best_feasible"])
+            if phase in self._best:
+                text += f", best {BEST_LABELS.get(phase, 'objective')} {self._best[phase]:.3f}"
+            self._p.update(task, completed=n, count=f"{n}/{self._totals.get(phase, '?')}", info=text)
         else:
             if phase == "validation" and "variants" in info:
                 from rocas.pipeline.analyze import validation_simulations

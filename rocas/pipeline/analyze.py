@@ -691,8 +691,15 @@ def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: flo
 
 # -- orchestration ---------------------------------------------------------------------------
 def _gen_info(s: GenerationStats) -> dict[str, Any]:
+    """A generation for the progress bars and the run directory. ``best_feasible`` is the
+    smallest second objective among its accident-free members: f2 (how unlike the original the
+    world became) in the physical search, h2 (how large the fix) in the cyber one."""
+    obj = np.asarray(s.objectives, dtype=float)
+    feas = np.asarray(s.constraints) <= 0
+    best = (float(np.min(obj[feas, 1])) if obj.ndim == 2 and obj.shape[1] > 1 and len(feas) == len(obj)
+            and feas.any() else None)
     return {"generation": s.generation, "evaluations": s.evaluations, "feasible": s.feasible,
-            "best_constraint": s.best_constraint}
+            "best_constraint": s.best_constraint, "best_feasible": best}
 
 
 def _gen_json(s: GenerationStats) -> dict[str, Any]:
