@@ -231,6 +231,7 @@ def _phase_replay(run: _Run, scenario: Scenario | None, recording: Path | None) 
             result = {"reproduced": is_accident(res.outcome), "ego_rmse_m": 0.0}
         run.scenario = scenario
         write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
+        write_text_atomic(run.out / "replay.json", json.dumps(result, indent=1))
         run.finish("replay", result, time.perf_counter() - t0, 1)
     # the original run's trajectories are re-simulated (deterministic) rather than stored
     (orig,) = evaluate(run.executor, [VariantTask(run.scenario, (), run.scenario.seed)])
@@ -669,6 +670,7 @@ def _phase_validation(run: _Run, fix: dict[str, float], module: str | None) -> d
     result = {"variants": n, "success_rate_original": ok_orig, "success_rate_fixed": ok_fixed,
               "fix_makes_it_worse": bool(n and ok_fixed < ok_orig),  # type: ignore[operator]
               "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2)}
+    write_text_atomic(run.out / "validation.json", json.dumps(result, indent=1))
     run.finish("validation", result, time.perf_counter() - t0, len(tasks))
     return result
 

@@ -37,16 +37,6 @@ if TYPE_CHECKING:
 EXECUTIONS = ("accident", "reference", "fixed")
 VERDICT_ENTITY = "verdict"
 VALIDATION_ENTITY = "validation"
-RUN_FILES = (
-    "accident.mcap",
-    "reference.mcap",
-    "fixed.mcap",
-    "diff.json",
-    "physical.json",
-    "cyber.json",
-    "report.md",
-    "report.json",
-)
 
 
 def log_verdict(rec: Any, markdown: str, entity: str = VERDICT_ENTITY) -> None:

@@ -37,7 +37,8 @@ def test_report_has_the_documented_keys_and_files(serial_run):
     assert REPORT_KEYS <= set(report)
     assert report["verdict"] in VERDICTS
     assert report["accident"]["kind"] == "emergency"
-    for name in ("state.json", "scenario.json", "accident.mcap", "report.json", "report.md"):
+    for name in ("state.json", "scenario.json", "replay.json", "accident.mcap", "report.json",
+                 "report.md"):
         assert (out / name).exists(), name
     assert json.loads((out / "report.json").read_text()) == report
     # every JSON file of the run is standard JSON (no Infinity or NaN), for tools other than ours
@@ -56,6 +57,7 @@ def test_report_has_the_documented_keys_and_files(serial_run):
         rob = v["robust_fix"]
         assert rob is None or rob["success_rate"] >= v["success_rate_fixed"] + ROBUST_TOLERANCE
         assert "**Robust value**" in (out / "report.md").read_text()
+        assert json.loads((out / "validation.json").read_text()) == v
 
 
 def test_same_result_whatever_the_executor(red_truck, serial_run, tmp_path):
