@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -253,12 +252,3 @@ def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
     if isinstance(a, Message) or isinstance(b, Message):
         return 1.0
     return _json(a, b, tol)
-
-
-def mdr_function(tol: Tolerance = EXACT) -> Callable[[Any, Any], float]:
-    """``mdr`` with its tolerance bound, for mapping over message pairs."""
-
-    def score(a: Any, b: Any) -> float:
-        return mdr(a, b, tol)
-
-    return score

@@ -9,8 +9,6 @@ with our screening search and with the paper's plain genetic search (``--no-scre
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -176,7 +174,3 @@ def run_bench(
         "scope_comparison": comparison,
         "instances": per_type,
     }
-
-
-def default_out() -> Path:
-    return Path(tempfile.gettempdir()) / f"rocas-bench-{os.getpid()}"

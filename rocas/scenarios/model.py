@@ -46,7 +46,6 @@ LIGHT_MODES = ("fixed", "cycle")
 #: Ego body: a sedan-sized test vehicle.
 EGO_LENGTH_M = 4.9
 EGO_WIDTH_M = 2.0
-EGO_HEIGHT_M = 1.6
 EGO_WHEELBASE_M = 2.85
 
 Point = tuple[float, float]

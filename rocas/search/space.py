@@ -10,7 +10,7 @@ single-property mutants is easy to write down.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -203,7 +203,3 @@ class MutationSpace:
         masks = rng.random((count, len(self.variables))) < mutate_prob
         genomes[:, 0::2] = np.where(masks, 0.75, 0.25)
         return genomes
-
-
-def space_from(variables: Sequence[Variable]) -> MutationSpace:
-    return MutationSpace(tuple(variables))
