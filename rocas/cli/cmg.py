@@ -121,7 +121,7 @@ def build_view(
         control_channel=control,
         control_source=source,
         notes=tuple(_notes(topology, by_topic)),
-        hints=tuple(_hints(recording, topology, control, source, marked)),
+        hints=tuple(_hints(recording, topology, control, marked)),
     )
 
 
@@ -146,7 +146,7 @@ def _notes(topology: Mapping[str, ChannelTopology],
 
 
 def _hints(recording: str, topology: Mapping[str, ChannelTopology], control: str | None,
-           source: str, marked: list[str]) -> list[str]:
+           marked: list[str]) -> list[str]:
     no_writers = [t for t, c in topology.items() if not c.writers]
     no_readers = [t for t, c in topology.items() if not c.readers and t != control]
     hints = []

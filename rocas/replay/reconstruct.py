@@ -70,7 +70,7 @@ class Reconstruction:
     path: str = ""
 
 
-def _ego_from_meta(meta: dict[str, str], lanes: dict[str, Any]) -> tuple[dict[str, Any], dict]:
+def _ego_from_meta(meta: dict[str, str]) -> dict[str, Any]:
     try:
         ego = json.loads(meta["ego"]) if meta.get("ego") else {
             "route": [r for r in meta["route"].split(",") if r],
@@ -88,7 +88,7 @@ def _ego_from_meta(meta: dict[str, str], lanes: dict[str, Any]) -> tuple[dict[st
             module, _, short = name.partition(".")
             nested.setdefault(module, {})[short] = value
         ego["params"] = nested
-    return ego, ego.get("params", {})
+    return ego
 
 
 def _ego_from_pose(rec: RecordedRun, scenario_dict: dict[str, Any]) -> dict[str, Any]:
@@ -187,7 +187,7 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     head = dict(world.get("scenario", {}))
     meta = rec.ego_meta
     if meta is not None:
-        ego, _ = _ego_from_meta(meta, world)
+        ego = _ego_from_meta(meta)
         for key, conv in (("seed", int), ("dt_s", float), ("duration_s", float)):
             if meta.get(key):
                 head[key] = conv(meta[key])

@@ -164,8 +164,8 @@ def _reidentify(d: Detections, a: _Piece, b: _Piece, gap: float,
     return best
 
 
-def _stitch(d: Detections, pieces: list[_Piece], period: float,
-            lanes: tuple[Lane, ...] = ()) -> list[list[_Piece]]:
+def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
+            ) -> list[list[_Piece]]:
     """Link pieces into chains (greedy on the extrapolation distance; id switches and short
     gaps first, then re-identification across long gaps along the map)."""
     links = []
@@ -330,7 +330,7 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = ()) -
         rows = rows[np.argsort(d.times[rows], kind="stable")]
         pieces.append(_Piece(int(tid), rows))
     tracks = []
-    for chain in _stitch(d, pieces, period_s, lanes):
+    for chain in _stitch(d, pieces, lanes):
         rows = np.concatenate([p.rows for p in chain])
         if len(rows) < MIN_DETECTIONS:
             continue

@@ -868,7 +868,7 @@ def log_scene(
     _log_ego(rec, ex, prefix)
     names = actor_names(ex)
     _log_actors(rec, ex, prefix, names, highlight)
-    _log_paths(rec, ex, prefix, names)
+    _log_paths(rec, ex, prefix)
     acc = ex.accident()
     events: list[tuple[float, str]] = []
     if acc is not None:
@@ -1016,7 +1016,7 @@ def _log_actors(
             )
 
 
-def _log_paths(rec: Any, ex: Execution, prefix: str, names: dict[str, str]) -> None:
+def _log_paths(rec: Any, ex: Execution, prefix: str) -> None:
     import rerun as rr
 
     if ex.plans:
