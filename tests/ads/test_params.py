@@ -62,3 +62,20 @@ def test_good_assignment():
         "planning.use_path_tangent_heading", 0.0)
     assert parse_assignment(" planning.yield_distance_m = 2.5") == (
         "planning.yield_distance_m", 2.5)
+
+
+def test_every_parameter_is_read_by_some_module():
+    # a parameter that no code reads would be searched, reported and "fixed" without effect;
+    # the modules read parameters by their short name (p["name"] or params.module.name)
+    import re
+    from pathlib import Path
+
+    import rocas
+    from rocas.ads.params import PARAMETERS
+
+    root = Path(rocas.__file__).parent
+    code = "\n".join(f.read_text() for f in root.rglob("*.py")
+                     if f.name != "params.py" and not f.name.endswith("_pb2.py"))
+    unread = [n for n in PARAMETERS
+              if not re.search(r"""["']%s["']|\.%s\b""" % ((re.escape(n.split(".", 1)[1]),) * 2), code)]
+    assert unread == []
