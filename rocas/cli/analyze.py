@@ -27,7 +27,7 @@ def add_search_arguments(p: argparse.ArgumentParser) -> None:
                    help="perturbed variants in the regression test (default 200)")
     p.add_argument("--no-screening", dest="screening", action="store_false",
                    help="start the cyber search without trying each parameter alone first "
-                        "(the paper's plain genetic search)")
+                        "(a plain genetic search, as the paper's has no screening)")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

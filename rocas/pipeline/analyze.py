@@ -82,8 +82,9 @@ class AnalyzeConfig:
         shrink_candidates: how many of the search's best fixes (distinct parameter sets or
             directions of change) are shrunk before one is chosen (see _smallest_fix).
         screening: start the cyber search by trying every parameter alone at both ends of its
-            range (two simulations per parameter, out of the budget); False runs the paper's
-            plain genetic search from a population half single-parameter mutants, half random.
+            range (two simulations per parameter, out of the budget); False runs a plain
+            genetic search (the paper has no screening) from a population half single-parameter
+            mutants, half random.
     """
 
     seed: int = 0

@@ -4,7 +4,8 @@ Prints the paper's Table 4 for our ADS (a hit/miss mark per column), the time br
 phase, the search-space reduction (parameters searched against all, as in Table 2) and the
 comparison of ``--scope module`` with ``--scope all`` (the paper's brute-force baseline):
 simulations and time to the first fix, and whether the fix found is the documented one, each
-with our screening search and with the paper's plain genetic search (``--no-screening``).
+with our screening search and with a plain genetic search without it, as the paper's
+(``--no-screening``).
 """
 
 from __future__ import annotations
