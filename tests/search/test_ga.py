@@ -50,6 +50,18 @@ def test_resume_continues_to_the_same_result(tmp_path):
     assert _summary(_search(SerialExecutor(), checkpoint=ckpt)) == full
 
 
+def test_the_search_can_stop_early_once_a_fix_is_known():
+    from dataclasses import replace
+
+    full = _search(SerialExecutor())
+    first = min(c.generation for c in full.candidates if c.feasible)
+    early = _search(SerialExecutor(), cfg=replace(CFG, stop_when_feasible_after=first))
+    # the same generations up to the first one with a fix, then nothing more
+    assert [g.generation for g in early.generations] == list(range(1, max(first, 1) + 1))
+    assert _summary(early) == [x for x in _summary(full) if x[3] <= max(first, 1)]
+    assert any(c.feasible for c in early.candidates) and early.evaluations < full.evaluations
+
+
 def test_identical_mutations_are_simulated_once():
     calls = []
 
