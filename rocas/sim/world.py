@@ -89,7 +89,6 @@ class RoadGeometry:
     """
 
     lane_ids: tuple[str, ...]
-    lane_width: np.ndarray
     lane_points: np.ndarray
     lane_point_heading: np.ndarray
     lane_point_lane: np.ndarray
@@ -175,7 +174,6 @@ def road_geometry(lanes: tuple[Lane, ...], route: tuple[str, ...], start_s_m: fl
     ref_half_width = np.array([by_id[route[i]].width_m / 2 for i in lane_idx])
     return RoadGeometry(
         lane_ids=tuple(ln.id for ln in lanes),
-        lane_width=np.array([ln.width_m for ln in lanes]),
         lane_points=lane_points, lane_point_heading=lane_heading, lane_point_lane=lane_lane,
         lane_point_s=lane_s, chain_points=chain_pts, chain_heading=chain_heading,
         lane_grid=lane_grid, ref_grid=NearestGrid.build(ref, 1.0, 4, 12.0),
