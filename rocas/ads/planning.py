@@ -196,13 +196,16 @@ class Planning:
             lat_k = hw_s * ca + hl_s * sa
             lon_k = hl_s * ca + hw_s * sa
             tk = pred.traj_t[:, None, :]
+            # distance of each forecast point from the ego's path and the bodies' half widths,
+            # shared by the buffered overlap and the body overlap below
+            dist_k = np.abs(lk - offset_at(sk))
+            half_k = hw_e + lat_k
             over = (mov[sub][..., None] & pred.traj_valid[:, None, :]
                     & (tk <= p["overlap_check_horizon_s"][:, None, None])
-                    & (np.abs(lk - offset_at(sk)) < hw_e + lat_k
-                       + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
+                    & (dist_k < half_k + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
                     & (sk + lon_k > (s0 - hl_e)[:, None, None]))
             any_over[sub] = over.any(-1)
-            body_k = over & (np.abs(lk - offset_at(sk)) < hw_e + lat_k + buf_vru[sub][..., None])
+            body_k = over & (dist_k < half_k + buf_vru[sub][..., None])
             body_over[sub] = body_k.any(-1)
             k_in[sub] = np.argmax(over, axis=-1)
             s_lo[sub] = np.min(np.where(over, sk - lon_k, np.inf), -1)
