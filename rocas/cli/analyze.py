@@ -155,7 +155,9 @@ class _Progress:
             if phase == "validation" and "variants" in info:
                 from rocas.pipeline.analyze import validation_simulations
 
-                self._done[phase] = validation_simulations(info["variants"])
+                info = dict(info)  # the count column shows the simulations, the text the rest
+                self._done[phase] = info.pop("simulations", None) or validation_simulations(
+                    info["variants"])
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 

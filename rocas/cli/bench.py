@@ -58,6 +58,8 @@ def _mark(ok: bool) -> str:
 def render(res: dict, env: Env) -> None:
     from rich.table import Table
 
+    from rocas.pipeline.report import change
+
     con = env.out()
     t = Table(title=f"Table 4 for the built-in ADS: {res['hits']} of {res['total']} hit")
     for c in ("id", "trigger found", "module (expected)", "misconfiguration found (expected)",
@@ -66,8 +68,7 @@ def render(res: dict, env: Env) -> None:
     for r in res["entries"]:
         e, f, m = r["expected"], r["found"], r["marks"]
         trig = f"{f['trigger_entity']}.{f['trigger_property']}" if f["trigger_entity"] else "—"
-        found = ", ".join(f"{c['parameter']} {_num(c['original'])} -> {_num(c['mutated'])}"
-                          for c in f["changes"]) or "—"
+        found = ", ".join(change(c, "->") for c in f["changes"]) or "—"
         if f.get("robust"):
             found += ", robust " + ", ".join(_num(v) for v in f["robust"].values())
         wanted = "; ".join(", ".join(f"{k} {_num(v)}" for k, v in fix.items())

@@ -25,7 +25,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -164,7 +164,21 @@ class _Run:
     original: VariantResult | None = None
     accident: Accident | None = None
     accident_tick: int = 0
-    evaluations: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def h1_horizon(self) -> int:
+        """Samples of the ego trajectory h1 compares: [0, d - delta] (at least one)."""
+        assert self.scenario is not None
+        return max(1, self.accident_tick - int(round(self.cfg.delta_s / self.scenario.dt_s)))
+
+    def cyber_space(self, module: str | None) -> MutationSpace:
+        """The parameters the cyber phase searches (the module's, or all with --scope all) at
+        the values in force in the accident run."""
+        from rocas.ads.params import ParamSet
+
+        assert self.scenario is not None
+        return cyber_space(module if self.cfg.scope == "module" else None,
+                           dict(ParamSet(self.scenario.ego.overrides)))
 
     def save(self) -> None:
         write_text_atomic(self.out / "state.json", json.dumps(self.state, indent=2, default=_jsonable))
@@ -197,7 +211,8 @@ def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig) ->
                              "continue it with --resume, or choose another --out")
         state = json.loads(state_path.read_text())
         # a setting added after the run was started has its default, which is what that run used
-        defaults = {k: getattr(AnalyzeConfig(), k) for k in config}
+        default = AnalyzeConfig()
+        defaults = {k: getattr(default, k) for k in config}
         if state.get("source") != source or {**defaults, **state.get("config", {})} != config:
             raise UsageError(f"run directory {out} holds an analysis of other inputs or settings",
                              "choose another --out, or resume with the same input and options")
@@ -372,7 +387,6 @@ def _phase_diff(run: _Run) -> dict[str, Any]:
 
 # -- phase IV: cyber mutation ----------------------------------------------------------------
 def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
-    from rocas.ads.params import ParamSet
     from rocas.sim.engine import simulate
 
     if run.done("cyber"):
@@ -381,9 +395,8 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     t0 = time.perf_counter()
     scn, orig = run.scenario, run.original
     assert scn is not None and orig is not None
-    current = dict(ParamSet(scn.ego.overrides))
-    space = cyber_space(module if run.cfg.scope == "module" else None, current)
-    horizon = max(1, run.accident_tick - int(round(run.cfg.delta_s / scn.dt_s)))
+    space = run.cyber_space(module)
+    horizon = run.h1_horizon
 
     def overrides(m: Mutation) -> tuple[tuple[str, float], ...]:
         return params_tuple({k: float(v) for k, v in m.values.items()})
@@ -609,8 +622,9 @@ ROBUST_TOLERANCE = 0.05
 
 
 def validation_simulations(variants: int) -> int:
-    """Simulations of phase V: the variants with the original and the minimal fix, then each
-    stronger value on the accident itself and on every variant (none without variants)."""
+    """Simulations of phase V at most: the variants with the original and the minimal fix, then
+    each stronger value on the accident itself and on every variant (none without variants;
+    fewer when stronger values coincide, see stronger_fixes)."""
     return 2 * variants + len(STRONGER_FRACTIONS) * (variants + 1) if variants else 0
 
 
@@ -618,8 +632,10 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
                    ) -> list[tuple[float, dict[str, float]]]:
     """``(fraction, values)``: the fix moved each of STRONGER_FRACTIONS of the way on to the end
     of each parameter's range in the direction it moved (integer parameters rounded), closest
-    first."""
-    out = []
+    first. A value equal to the fix or to a closer one is left out (it would only be simulated
+    again): a fix already at the end of its range has no stronger value."""
+    out: list[tuple[float, dict[str, float]]] = []
+    seen = [dict(fix)]
     for f in STRONGER_FRACTIONS:
         values = {}
         for name, x in fix.items():
@@ -629,7 +645,9 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
             # x + f * (end - x) can land a rounding error outside the range, which the ADS refuses
             v = min(max(x + f * (end - x), lo), hi)
             values[name] = float(round(v)) if var.kind == "int" else v
-        out.append((f, values))
+        if values not in seen:
+            seen.append(values)
+            out.append((f, values))
     return out
 
 
@@ -638,29 +656,26 @@ def _phase_validation(run: _Run, fix: dict[str, float], module: str | None) -> d
     with the minimal fix. Then the robust value: the fix moved further the same way
     (STRONGER_FRACTIONS), each stronger value run on the accident (it must still avoid it and
     keep the ego's earlier trajectory, h1) and on the same variants."""
-    from rocas.ads.params import ParamSet
-
     if run.done("validation"):
         return run.state["done"]["validation"]
     t0 = time.perf_counter()
     assert run.scenario is not None and run.original is not None
     variants = perturbed_variants(run.scenario, run.cfg.validation_variants, run.cfg.seed)
     n = len(variants)
-    stronger = stronger_fixes(fix, cyber_space(module if run.cfg.scope == "module" else None,
-                                                 dict(ParamSet(run.scenario.ego.overrides)))) if n else []
+    stronger = stronger_fixes(fix, run.cyber_space(module)) if n else []
     tasks = [VariantTask(v, (), v.seed) for v in variants] + \
         [VariantTask(v, params_tuple(fix), v.seed) for v in variants]
     for _, values in stronger:
         tasks.append(VariantTask(run.scenario, params_tuple(values), run.scenario.seed))
         tasks += [VariantTask(v, params_tuple(values), v.seed) for v in variants]
-    run.progress("validation", {"variants": n})
+    run.progress("validation", {"variants": n, "simulations": len(tasks)})
     res = evaluate(run.executor, tasks, run.cfg.batch_size)
 
     def rate(rs: list[VariantResult]) -> float:
         return sum(not is_accident(r.outcome) for r in rs) / n
 
     ok_orig, ok_fixed = (rate(res[:n]), rate(res[n:2 * n])) if n else (None, None)
-    horizon = max(1, run.accident_tick - int(round(run.cfg.delta_s / run.scenario.dt_s)))
+    horizon = run.h1_horizon
     sweep = []
     for k, (f, values) in enumerate(stronger):
         first = 2 * n + k * (n + 1)

@@ -42,6 +42,16 @@ def test_stronger_values_stay_inside_the_range_despite_rounding():
     assert out[-1][1]["prediction.accel_decay_s"] == 0.1
 
 
+def test_stronger_values_that_coincide_are_tried_once():
+    space = cyber_space("perception", {})
+    # a fix at the end of its range has nothing stronger to try
+    assert stronger_fixes({"perception.brake_threshold": 0.99}, space) == []
+    # brake_min_frames (integer, range 1-10, default 3) raised to 9: 9 + f * 1 rounds to 9, 9, 10,
+    # 10, 10, so only the first 10 remains
+    assert stronger_fixes({"perception.brake_min_frames": 9.0}, space) == [
+        (0.5, {"perception.brake_min_frames": 10.0})]
+
+
 def test_phase_v_simulation_count():
     assert validation_simulations(200) == 400 + len(STRONGER_FRACTIONS) * 201
     assert validation_simulations(0) == 0  # --validation 0: no regression test, no sweep
