@@ -10,7 +10,7 @@ reconstructed :class:`~rocas.scenarios.Scenario` (what the search phases mutate)
   kind, model and colour;
 - :mod:`~rocas.replay.lanes` and :mod:`~rocas.replay.paths`: tracks -> actors (waypoints
   extended along the map, a speed profile designed for the simulator's actor model);
-- :mod:`~rocas.replay.reconstruct`: :func:`reconstruct` -> :class:`Reconstruction`;
+- :mod:`~rocas.replay.reconstruction`: :func:`reconstruct` -> :class:`Reconstruction`;
 - :mod:`~rocas.replay.run`: :func:`replay` -> :class:`ReplayReport` (closed loop, fidelity).
 
 Heavy modules load on first use, so ``import rocas`` stays cheap.
@@ -25,14 +25,14 @@ import types
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from rocas.replay.reconstruct import AccidentInfo, Reconstruction, reconstruct
+    from rocas.replay.reconstruction import AccidentInfo, Reconstruction, reconstruct
     from rocas.replay.run import ReplayReport, replay
     from rocas.scenarios.model import Scenario
 
 _LAZY = {
-    "AccidentInfo": "rocas.replay.reconstruct",
-    "Reconstruction": "rocas.replay.reconstruct",
-    "reconstruct": "rocas.replay.reconstruct",
+    "AccidentInfo": "rocas.replay.reconstruction",
+    "Reconstruction": "rocas.replay.reconstruction",
+    "reconstruct": "rocas.replay.reconstruction",
     "ReplayReport": "rocas.replay.run",
     "replay": "rocas.replay.run",
     "TIME_TOLERANCE_S": "rocas.replay.run",
@@ -55,7 +55,7 @@ class _CallableModule(types.ModuleType):
     """``rocas.replay(path)`` -> the reconstructed Scenario."""
 
     def __call__(self, path: str | os.PathLike[str]) -> Scenario:
-        from rocas.replay.reconstruct import reconstruct
+        from rocas.replay.reconstruction import reconstruct
 
         return reconstruct(path).scenario
 

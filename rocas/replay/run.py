@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from rocas.replay.reconstruct import (
+from rocas.replay.reconstruction import (
     AccidentInfo,
     Reconstruction,
     reconstruct,

@@ -3,7 +3,7 @@
 import numpy as np
 
 from rocas.replay import reconstruct, replay
-from rocas.replay.reconstruct import AccidentInfo
+from rocas.replay.reconstruction import AccidentInfo
 from rocas.replay.run import same_accident, trajectory_error
 
 

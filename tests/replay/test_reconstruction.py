@@ -23,6 +23,18 @@ def test_rocas_replay_is_callable_and_returns_the_scenario(recorded):
     assert rocas.replay.reconstruct is reconstruct
 
 
+def test_the_public_functions_stay_functions_whatever_is_imported_first():
+    """A submodule named like a lazily exported function would replace it on the package once
+    imported (``rocas.replay.reconstruct`` was the module, not callable, after
+    ``import rocas.replay.run``, depending on test order); checked in a fresh interpreter."""
+    import subprocess
+    import sys
+
+    code = ("import rocas.replay.run, rocas.replay.reconstruction, rocas.replay as r; "
+            "assert callable(r.reconstruct) and callable(r.replay), (r.reconstruct, r.replay)")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
 def test_world_ego_and_actor_identity(recorded):
     rec = recorded("left_turn_oncoming")
     r = reconstruct(rec.path)
