@@ -121,7 +121,7 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
         for e in _selected(args.only):
             rep = generate_instances(e, args.instances, seed=args.seed)
             rows.append({"id": e.id, "key": e.key, "tried": rep.tried, "crashed": rep.crashed,
-                         "kept": len(rep.instances)})
+                         "fix_holds": rep.fix_holds, "kept": len(rep.instances)})
             if out_dir is not None:
                 from rocas._fs import atomic_path
 
@@ -130,7 +130,9 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
                         tmp.write_text(scenario_toml(sc), encoding="utf-8")
                     written.append(f"{sc.name}.toml")
             if not args.json:
-                print(f"{e.id}: {rep.crashed}/{rep.tried} tried variants crash; kept "
+                fixed = (f", the documented fix repairs {rep.fix_holds}" if e.truth.fixable else
+                         " (no fix exists to check)")
+                print(f"{e.id}: {rep.crashed}/{rep.tried} tried variants crash{fixed}; kept "
                       f"{len(rep.instances)}", file=env.stdout)
     except KeyboardInterrupt as exc:
         exc.kept = _kept(written, out_dir, "scenario file")  # type: ignore[attr-defined]

@@ -12,10 +12,14 @@ import pytest
 from rocas.ads.params import PARAMETERS
 from rocas.recording.reader import open_recording
 from rocas.scenarios.catalog import (
+    PRE_ACCIDENT_MARGIN_S,
+    PRE_ACCIDENT_RMSE_M,
+    _jittered,
     accident_matches,
     accident_time,
     entries,
     entry,
+    fix_holds,
     generate_instances,
     mutate,
     scenario_toml,
@@ -25,10 +29,6 @@ from rocas.scenarios.loader import scenario_from_dict
 from rocas.sim.engine import simulate_batch
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
-#: Bound on the ego's deviation before the accident when the fix is applied [m].
-PRE_ACCIDENT_RMSE_M = 0.5
-#: The comparison window ends this long before the accident [s].
-PRE_ACCIDENT_MARGIN_S = 3.0
 ENTRIES = entries()
 IDS = [e.id for e in ENTRIES]
 
@@ -84,6 +84,7 @@ def test_the_documented_fix_avoids_the_accident_and_keeps_the_trajectory(runs, t
     rmse = trajectory_rmse(res.ego[0], res.ego[2 + which], res.times,
                            t_acc - PRE_ACCIDENT_MARGIN_S)
     assert rmse < PRE_ACCIDENT_RMSE_M
+    assert fix_holds(res.outcomes[0], res.ego[0], o, res.ego[2 + which], res.times)
 
 
 def _grid(name: str, points: int) -> list[float]:
@@ -133,11 +134,24 @@ def test_instances_are_seeded_crashing_variants_that_round_trip_as_toml():
     e = entry("A9")
     a = generate_instances(e, 2, seed=3, max_tries=4)
     b = generate_instances(e, 2, seed=3, max_tries=4)
-    assert a.tried == 4 and 0 < a.crashed <= 4 and len(a.instances) == 2
+    assert a.tried == 4 and 0 < a.fix_holds <= a.crashed <= 4 and len(a.instances) == 2
     assert [s for _, s in a.instances] == [s for _, s in b.instances]
     assert a.instances[0][1] != e.scenario
     back = scenario_from_dict(tomllib.loads(scenario_toml(a.instances[0][1])))
     assert back == a.instances[0][1]
+
+
+def test_instances_the_documented_fix_does_not_repair_are_not_kept():
+    """A4's variants 0 and 1 (seed 0) crash, but yield_distance_m 0.5 brakes hard on them; the
+    first variant it repairs is 5. An instance is scored against the documented fix, so only
+    variants that fix repairs are kept."""
+    e = entry("A4")
+    rep = generate_instances(e, 1, seed=0, max_tries=6, batch=6)
+    assert [k for k, _ in rep.instances] == [5] and rep.crashed > rep.fix_holds >= 1
+    first = _jittered(e, np.random.default_rng([0, 0]))
+    res = simulate_batch([first, first], params=[None, dict(e.truth.fix)])
+    assert accident_matches(e.truth, res.outcomes[0])
+    assert not fix_holds(res.outcomes[0], res.ego[0], res.outcomes[1], res.ego[1], res.times)
 
 
 def _truth_doc(**changes):  # noqa: ANN003, ANN202

@@ -15,7 +15,8 @@ e.reference_scenario  # the triggering property mutated: no accident
 ```
 
 Instances (:func:`generate_instances`) are seeded variants of an entry (positions, speeds,
-timing and weather jittered) that still crash.
+timing and weather jittered) that still crash, and that a documented fix still repairs: the
+ground truth holds for them as it does for the entry.
 """
 
 from __future__ import annotations
@@ -38,6 +39,10 @@ from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 from rocas.scenarios.model import Scenario
 
 CONSEQUENCES = ("collision", "emergency")
+#: a documented fix may move the ego by at most this much (RMSE [m]) before the accident...
+PRE_ACCIDENT_RMSE_M = 0.5
+#: ...over [0, t_accident - this] [s]
+PRE_ACCIDENT_MARGIN_S = 3.0
 MODULES = ("perception", "prediction", "planning")
 _ENTITY_KEYS = {"actor": "actors", "object": "objects", "area": "areas",
                 "traffic_light": "traffic_lights"}
@@ -293,30 +298,57 @@ def _jittered(e: CatalogEntry, rng: np.random.Generator) -> Scenario:
 
 @dataclass(frozen=True)
 class InstanceReport:
-    """Instance generation of one type: how many variants were tried and how many crash."""
+    """Instance generation of one type: how many variants were tried, how many crash as
+    documented, and of those how many a documented fix still repairs (all of them for an
+    unfixable entry, which has no fix to check)."""
 
     entry: CatalogEntry
     tried: int
     crashed: int
-    instances: tuple[tuple[int, Scenario], ...]   # (seed, scenario) of the crashing variants
+    fix_holds: int
+    instances: tuple[tuple[int, Scenario], ...]   # (seed, scenario) of the kept variants
+
+
+def fix_holds(accident: Any, accident_ego: np.ndarray, fixed: Any, fixed_ego: np.ndarray,
+              times: np.ndarray) -> bool:
+    """Whether a fix repairs an accident the way the catalog documents fixes: the fixed run
+    (outcome ``fixed``) has neither collision nor emergency, and its ego stays within
+    PRE_ACCIDENT_RMSE_M of the accident run's over [0, t_accident - PRE_ACCIDENT_MARGIN_S].
+
+    Args:
+        accident, fixed: the two runs' outcomes.
+        accident_ego, fixed_ego: (T + 1, >=2) the two runs' ego positions [m].
+        times: (T + 1,) sample times [s].
+    """
+    if fixed.collided or fixed.emergency:
+        return False
+    t_acc = accident_time(accident)
+    if t_acc is None:
+        return True
+    return trajectory_rmse(accident_ego, fixed_ego, times,
+                           t_acc - PRE_ACCIDENT_MARGIN_S) < PRE_ACCIDENT_RMSE_M
 
 
 def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
                        max_tries: int | None = None, batch: int = 16) -> InstanceReport:
-    """Up to ``count`` seeded variants of an entry that still crash (as documented).
+    """Up to ``count`` seeded variants of an entry that still crash (as documented) and, for a
+    fixable entry, that one of its documented fixes still repairs (:func:`fix_holds`): a
+    variant the documented fix does not repair has no known misconfiguration, so scoring an
+    analysis of it against the entry's would be scoring against a wrong answer.
 
     Variants are drawn in batches from ``numpy.random.default_rng([seed, k])`` for
-    k = 0, 1, ...; each is simulated and kept when it ends in the entry's accident. Stops at
-    ``count`` kept or ``max_tries`` (default ``4 * count``) tried.
+    k = 0, 1, ...; each is simulated (the crashing ones again with each documented fix) and
+    kept when it passes. Stops at ``count`` kept or ``max_tries`` (default ``8 * count``)
+    tried.
     """
     from rocas.sim.engine import simulate_batch
 
     if count < 1:
         raise UsageError("the number of instances must be >= 1")
-    max_tries = max_tries or 4 * count
+    max_tries = max_tries or 8 * count
+    fixes = [dict(f) for f in e.truth.fixes]
     kept: list[tuple[int, Scenario]] = []
-    tried = 0
-    crashed = 0
+    tried = crashed = holds = 0
     k = 0
     while len(kept) < count and tried < max_tries:
         n = min(batch, max_tries - tried)
@@ -324,14 +356,22 @@ def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
         k += n
         res = simulate_batch([v for _, v in variants])
         tried += n
-        for (vseed, sc), out in zip(variants, res.outcomes, strict=True):
-            if accident_matches(e.truth, out):
-                crashed += 1
-                if len(kept) < count:
-                    kept.append((vseed, dataclasses.replace(
-                        sc, name=f"{e.key}_i{vseed:03d}",
-                        description=f"{sc.description} (instance {vseed})")))
-    return InstanceReport(entry=e, tried=tried, crashed=crashed, instances=tuple(kept))
+        crash = [i for i, out in enumerate(res.outcomes) if accident_matches(e.truth, out)]
+        crashed += len(crash)
+        good = crash
+        if fixes and crash:
+            pairs = [(i, f) for i in crash for f in fixes]
+            fixed = simulate_batch([variants[i][1] for i, _ in pairs], params=[f for _, f in pairs])
+            ok = {i for j, (i, _) in enumerate(pairs)
+                  if fix_holds(res.outcomes[i], res.ego[i], fixed.outcomes[j], fixed.ego[j], res.times)}
+            good = [i for i in crash if i in ok]
+        holds += len(good)
+        for i in good[:count - len(kept)]:
+            vseed, sc = variants[i]
+            kept.append((vseed, dataclasses.replace(
+                sc, name=f"{e.key}_i{vseed:03d}", description=f"{sc.description} (instance {vseed})")))
+    return InstanceReport(entry=e, tried=tried, crashed=crashed, fix_holds=holds,
+                          instances=tuple(kept))
 
 
 def trajectory_rmse(a: np.ndarray, b: np.ndarray, times: np.ndarray, until_s: float) -> float:
@@ -343,8 +383,9 @@ def trajectory_rmse(a: np.ndarray, b: np.ndarray, times: np.ndarray, until_s: fl
     return math.sqrt(float(np.mean(np.sum(d * d, axis=1))))
 
 
-__all__ = ["CatalogEntry", "GroundTruth", "InstanceReport", "accident_matches", "accident_time",
-           "entries", "entry", "generate_instances", "mutate",
+__all__ = ["PRE_ACCIDENT_MARGIN_S", "PRE_ACCIDENT_RMSE_M", "CatalogEntry", "GroundTruth",
+           "InstanceReport", "accident_matches", "accident_time", "entries", "entry", "fix_holds",
+           "generate_instances", "mutate",
            "scenario_toml", "trajectory_rmse"]
 
 
