@@ -85,13 +85,15 @@ class ChangePoints:
         times_s: change point times, ascending [s]: the first bin of each new segment.
         indices: (k,) index into the series of each new segment's first bin.
         penalty: the penalty used.
-        baseline_std: the estimated noise standard deviation [MDR units].
+        noise_std: the series' noise estimate the penalty derives from (the larger of the
+            baseline's standard deviation and that of the bin-to-bin differences over sqrt 2)
+            [MDR units].
     """
 
     times_s: tuple[float, ...]
     indices: tuple[int, ...]
     penalty: float
-    baseline_std: float
+    noise_std: float
 
     @property
     def first_s(self) -> float | None:
@@ -102,7 +104,7 @@ class ChangePoints:
 def penalty_for(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> tuple[
     float, float
 ]:
-    """(penalty, baseline std) for a series, per the module docstring."""
+    """(penalty, noise std) for a series, per the module docstring."""
     base = values[times_s < times_s[0] + cfg.baseline_s] if len(values) else values
     base_var = float(np.var(base)) if len(base) > 1 else 0.0
     diff_var = float(np.var(np.diff(values))) / 2.0 if len(values) > 2 else 0.0

@@ -111,6 +111,7 @@ class DiffResult:
                     "only_in": c.only_in,
                     "bins": len(c.series.mdr),
                     "penalty": c.change_points.penalty,
+                    "noise_std": c.change_points.noise_std,
                 }
                 for c in self.channels
             ],

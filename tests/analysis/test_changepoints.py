@@ -40,6 +40,18 @@ def test_penalty_scales_with_baseline_noise():
     assert detect(noisy, t, cfg).penalty > detect(quiet, t, cfg).penalty
 
 
+def test_penalty_is_the_documented_formula_of_the_reported_noise():
+    import math
+
+    y, t = _step(noise=0.05)
+    cfg = ChangePointConfig()
+    cp = detect(y, t, cfg)
+    base = y[t < t[0] + cfg.baseline_s]
+    assert cp.noise_std == pytest.approx(max(np.std(base), np.std(np.diff(y)) / math.sqrt(2)))
+    assert cp.penalty == pytest.approx(cfg.penalty_scale * max(cp.noise_std, cfg.noise_floor) ** 2
+                                       * math.log(len(y)))
+
+
 def test_fixed_penalty_overrides_the_formula():
     y, t = _step()
     assert detect(y, t, ChangePointConfig(penalty=1e6)).first_s is None

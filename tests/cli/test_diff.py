@@ -32,7 +32,9 @@ def test_json_output_has_the_documented_keys(rocas, pair):
     assert data["path"][0] == "/vehicle/actuation" and data["path"][-1] == "forecaster"
     ch = {c["topic"]: c for c in data["channels"]}
     for c in ch.values():
-        assert {"topic", "writers", "readers", "change_point_s", "mdr_before", "mdr_after"} <= set(c)
+        assert {"topic", "writers", "readers", "change_point_s", "change_points_s", "mdr_before",
+                "mdr_after", "only_in", "bins", "penalty", "noise_std"} <= set(c)
+        assert c["noise_std"] >= 0 and c["penalty"] > 0
     assert ch["/fusion/forecast"]["writers"] == ["forecaster"]
     assert ch["/fusion/forecast"]["change_point_s"] == pytest.approx(6.0, abs=0.15)
     mods = {m["name"]: m for m in data["modules"]}
