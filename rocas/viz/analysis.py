@@ -47,19 +47,19 @@ def log_verdict(rec: Any, markdown: str, entity: str = VERDICT_ENTITY) -> None:
 
 
 def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str = VALIDATION_ENTITY
-                   ) -> bool:
+                   ) -> None:
     """Log phase V (the ``validation`` object of report.json) as static bar charts and a table.
 
     ``<entity>/original`` is one bar at x = -0.125, ``<entity>/fix`` the minimal fix at x = 0 and
     the stronger values at their fraction of the way to the range's end (x = 0.125 ... 1), all in
-    % of the variants that stay accident-free; ``<entity>/summary`` is the table. Returns False
-    (and logs nothing) when there was no validation.
+    % of the variants that stay accident-free; ``<entity>/summary`` is the table. Logs nothing
+    when there was no validation.
     """
     import numpy as np
     import rerun as rr
 
     if not validation or not validation.get("variants"):
-        return False
+        return
     stronger = list(validation.get("stronger") or [])
     rec.log(f"{entity}/original",
             rr.BarChart([100 * validation["success_rate_original"]], abscissa=[-0.125], widths=[0.1],
@@ -82,7 +82,6 @@ def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str =
     text = (f"# Validation\n\n{validation['variants']} perturbed variants, each run with every "
             "configuration below.\n\n" + "\n".join(rows) + "\n")
     rec.log(f"{entity}/summary", rr.TextDocument(text, media_type="text/markdown"), static=True)
-    return True
 
 
 def log_execution(
