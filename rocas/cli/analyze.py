@@ -12,8 +12,6 @@ from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
-#: the objective a search's progress bar reports the best accident-free value of (see _gen_info)
-BEST_LABELS = {"physical": "f2", "cyber": "h2"}
 
 
 def add_search_arguments(p: argparse.ArgumentParser) -> None:
@@ -149,7 +147,7 @@ class _Progress:
             if info.get("best_feasible") is not None:
                 self._best[phase] = min(self._best.get(phase, math.inf), info["best_feasible"])
             if phase in self._best:
-                text += f", best {BEST_LABELS.get(phase, 'objective')} {self._best[phase]:.3f}"
+                text += f", best {info.get('best_objective', 'objective')} {self._best[phase]:.3f}"
             self._p.update(task, completed=n, count=f"{n}/{self._totals.get(phase, '?')}", info=text)
         else:
             if phase == "validation" and "variants" in info:

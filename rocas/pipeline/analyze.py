@@ -291,9 +291,9 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
                                                  strict=True)]
 
     res = run_search(space, batch, run.cfg.search(1), 3, checkpoint=run.out / "physical.ckpt",
-                     on_generation=lambda s: run.progress("physical", _gen_info(s)))
+                     on_generation=lambda s: run.progress("physical", _gen_info(s, "f2")))
     chosen = _choose_trigger(res, space)
-    result: dict[str, Any] = {"generations": [_gen_json(g) for g in res.generations],
+    result: dict[str, Any] = {"generations": [_gen_json(g, "f2") for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "front": [_cand_json(c) for c in res.front[:20]]}
     evaluations = res.evaluations
@@ -419,9 +419,9 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
     originals = {v.name: float(v.original) for v in space.variables}
     res = run_search(space, batch, run.cfg.search(2, len(space.variables)), 2,
                      checkpoint=run.out / "cyber.ckpt",
-                     on_generation=lambda s: run.progress("cyber", _gen_info(s)))
+                     on_generation=lambda s: run.progress("cyber", _gen_info(s, "h2")))
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
-                              "generations": [_gen_json(g) for g in res.generations],
+                              "generations": [_gen_json(g, "h2") for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
@@ -708,20 +708,22 @@ def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: flo
 
 
 # -- orchestration ---------------------------------------------------------------------------
-def _gen_info(s: GenerationStats) -> dict[str, Any]:
+def _gen_info(s: GenerationStats, second: str) -> dict[str, Any]:
     """A generation for the progress bars and the run directory. ``best_feasible`` is the
-    smallest second objective among its accident-free members: f2 (how unlike the original the
-    world became) in the physical search, h2 (how large the fix) in the cyber one."""
+    smallest second objective among its accident-free members, and ``best_objective`` names
+    that objective (``second``): f2 (how unlike the original the world became) in the physical
+    search, h2 (how large the fix) in the cyber one."""
     obj = np.asarray(s.objectives, dtype=float)
     feas = np.asarray(s.constraints) <= 0
     best = (float(np.min(obj[feas, 1])) if obj.ndim == 2 and obj.shape[1] > 1 and len(feas) == len(obj)
             and feas.any() else None)
     return {"generation": s.generation, "evaluations": s.evaluations, "feasible": s.feasible,
-            "best_constraint": s.best_constraint, "best_feasible": best}
+            "best_constraint": s.best_constraint, "best_feasible": best, "best_objective": second}
 
 
-def _gen_json(s: GenerationStats) -> dict[str, Any]:
-    return {**_gen_info(s), "objectives": s.objectives.tolist(), "constraints": s.constraints.tolist()}
+def _gen_json(s: GenerationStats, second: str) -> dict[str, Any]:
+    return {**_gen_info(s, second), "objectives": s.objectives.tolist(),
+            "constraints": s.constraints.tolist()}
 
 
 def _cand_json(c: Candidate) -> dict[str, Any]:

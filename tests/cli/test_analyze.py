@@ -82,13 +82,16 @@ def test_progress_shows_the_best_accident_free_value_so_far():
     from rocas.cli.console import Env
 
     with _Progress(Env(stdout=io.StringIO(), stderr=io.StringIO()), {"cyber": 240}) as p:
-        p("cyber", {"generation": 0, "evaluations": 60, "feasible": 0, "best_feasible": None})
+        p("cyber", {"generation": 0, "evaluations": 60, "feasible": 0, "best_feasible": None,
+                    "best_objective": "h2"})
         info = lambda: next(t for t in p._p.tasks if t.description == "cyber").fields["info"]  # noqa: E731
         assert info() == "gen 0, feasible 0"
-        p("cyber", {"generation": 1, "evaluations": 84, "feasible": 3, "best_feasible": 1.25})
+        p("cyber", {"generation": 1, "evaluations": 84, "feasible": 3, "best_feasible": 1.25,
+                    "best_objective": "h2"})
         assert info() == "gen 1, feasible 3, best h2 1.250"
         # a later generation without a better fix keeps the best so far
-        p("cyber", {"generation": 2, "evaluations": 108, "feasible": 2, "best_feasible": 1.4})
+        p("cyber", {"generation": 2, "evaluations": 108, "feasible": 2, "best_feasible": 1.4,
+                    "best_objective": "h2"})
         assert info() == "gen 2, feasible 2, best h2 1.250"
 
 
@@ -100,9 +103,10 @@ def test_the_generation_record_has_its_best_accident_free_second_objective():
 
     objs = np.array([[0.1, 3.0], [0.2, 1.5], [0.0, 0.5]])
     g = GenerationStats(1, 3, 2, -1.0, objs, np.array([-1.0, 0.0, 0.7]))
-    assert _gen_info(g)["best_feasible"] == 1.5  # 0.5 belongs to a member that still crashes
+    assert _gen_info(g, "h2")["best_feasible"] == 1.5  # 0.5 belongs to a member that still crashes
+    assert _gen_info(g, "h2")["best_objective"] == "h2"
     none = GenerationStats(1, 3, 0, 0.7, objs, np.array([0.7, 0.7, 0.7]))
-    assert _gen_info(none)["best_feasible"] is None
+    assert _gen_info(none, "f2")["best_feasible"] is None
 
 
 def test_bench_prints_the_scope_ratio_from_when_the_first_fix_is_known():
