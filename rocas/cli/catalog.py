@@ -4,7 +4,8 @@
 - ``record DIR [--only A9 ...]``: simulate every entry with the ADS defaults and write its
   accident recording ``DIR/<key>.mcap`` (the files shipped in ``recordings/``).
 - ``generate --instances K [-o DIR] [--seed S]``: K seeded variants per type that still
-  crash; reports tried and crashing counts per type, writes the variants as scenario TOML.
+  crash and that a documented fix still repairs; reports per type how many were tried, crash
+  and are repaired, and writes the kept variants as scenario TOML.
 """
 
 from __future__ import annotations
@@ -27,11 +28,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     rec.add_argument("directory", metavar="DIR", help="output directory (e.g. recordings/)")
     rec.add_argument("--only", action="append", default=[], metavar="ID",
                      help="record only this entry (repeatable)")
-    gen = sub.add_parser("generate", help="seeded variants of every type that still crash")
+    gen = sub.add_parser("generate", help="seeded variants of every type that still crash and "
+                                            "that a documented fix still repairs")
     gen.add_argument("--instances", type=int, required=True, metavar="K",
                      help="variants per type")
     gen.add_argument("-o", "--output", metavar="DIR", default=None,
-                     help="write the crashing variants as scenario TOML files here")
+                     help="write the kept variants as scenario TOML files here")
     gen.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
     gen.add_argument("--only", action="append", default=[], metavar="ID",
                      help="only this type (repeatable)")

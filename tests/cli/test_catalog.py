@@ -26,10 +26,18 @@ def test_generate_reports_counts_and_writes_loadable_scenarios(rocas, tmp_path):
               "--json")
     assert r.code == 0, r.stderr
     row = json.loads(r.stdout)[0]
-    assert row["id"] == "A9" and row["tried"] >= row["kept"] == 2 and row["crashed"] >= 2
+    assert row["id"] == "A9" and row["tried"] >= row["crashed"] >= row["fix_holds"] >= row["kept"] == 2
     files = sorted(tmp_path.glob("a09_*.toml"))
     assert len(files) == 2
     assert load_scenario_text(files[0]).name == files[0].stem
+
+
+def test_generate_says_how_many_variants_the_documented_fix_repairs(rocas):
+    r = rocas("catalog", "generate", "--instances", "1", "--only", "A4", "--only", "A7")
+    assert r.code == 0, r.stderr
+    a4, a7 = r.stdout.splitlines()
+    assert a4.startswith("A4: ") and "the documented fix repairs" in a4 and a4.endswith("kept 1")
+    assert a7.startswith("A7: ") and "(no fix exists to check)" in a7
 
 
 def test_record_writes_the_accident(rocas, tmp_path):
