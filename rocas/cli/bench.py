@@ -87,7 +87,9 @@ def render(res: dict, env: Env) -> None:
     if res["scope_comparison"]:
         con.print(_scope_table(res["scope_comparison"]))
     for p in res["instances"]:
-        con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash; "
+        repaired = (f", the documented fix repairs {p['fix_holds']}" if p["fixable"]
+                    else " (no fix exists to check)")
+        con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash{repaired}; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")
 
 

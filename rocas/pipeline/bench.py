@@ -162,7 +162,8 @@ def run_bench(
                               resume=(out / "instances" / f"{e.key}_{seed}" / "state.json").exists())
                 hits += score(_expected(e.truth), _found(rep))["hit"]
             per_type.append({"type": e.id, "tried": inst.tried, "crashed": inst.crashed,
-                             "fix_holds": inst.fix_holds, "analyzed": len(inst.instances), "hits": hits,
+                             "fixable": e.truth.fixable, "fix_holds": inst.fix_holds,
+                             "analyzed": len(inst.instances), "hits": hits,
                              "accuracy": hits / len(inst.instances) if inst.instances else None})
 
     return {

@@ -39,3 +39,23 @@ def test_bench_scores_an_entry_and_compares_scopes_and_searches(tmp_path):
         # the comparison is about the cyber search: its runs skip the validation
         state = json.loads((tmp_path / name / "state.json").read_text())
         assert state["evaluations"].get("validation", 0) == 0
+
+
+@pytest.mark.slow  # two small analyses (about 15 s)
+def test_bench_instances_are_variants_the_documented_fix_repairs(tmp_path):
+    import io
+
+    from rocas.cli.bench import render
+    from rocas.cli.console import Env
+
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=0)
+    res = run_bench(["A9"], tmp_path, cfg, recordings=RECORDINGS, compare_scope=0, instances=1)
+    (inst,) = res["instances"]
+    assert inst["type"] == "A9" and inst["fixable"] and inst["analyzed"] == 1
+    assert inst["tried"] >= inst["crashed"] >= inst["fix_holds"] >= 1
+    assert 0 <= inst["hits"] <= 1 and inst["accuracy"] == inst["hits"]
+    assert len(list((tmp_path / "instances").iterdir())) == 1
+    out = io.StringIO()
+    render(res, Env(stdout=out, stderr=io.StringIO()))
+    assert (f"A9: {inst['crashed']} of {inst['tried']} variants crash, the documented fix repairs "
+            f"{inst['fix_holds']}; {inst['hits']} of 1 analysed correctly") in out.getvalue()
