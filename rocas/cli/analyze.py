@@ -150,12 +150,9 @@ class _Progress:
                 text += f", best {info.get('best_objective', 'objective')} {self._best[phase]:.3f}"
             self._p.update(task, completed=n, count=f"{n}/{self._totals.get(phase, '?')}", info=text)
         else:
-            if phase == "validation" and "variants" in info:
-                from rocas.pipeline.analyze import validation_simulations
-
+            if phase == "validation" and "simulations" in info:
                 info = dict(info)  # the count column shows the simulations, the text the rest
-                self._done[phase] = info.pop("simulations", None) or validation_simulations(
-                    info["variants"])
+                self._done[phase] = info.pop("simulations")
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 

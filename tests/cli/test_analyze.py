@@ -67,10 +67,11 @@ def test_progress_bars_finish_each_phase_when_the_next_starts():
         tasks = {t.description: t for t in p._p.tasks}
         assert tasks["replay"].finished and tasks["physical"].finished
         assert tasks["physical"].fields["count"] == "72 sims" and not tasks["diff"].finished
-        p("validation", {"variants": 4})
+        # what phase V sends: 4 variants with the original and the minimal fix, 5 stronger values
+        # on the accident and the 4
+        p("validation", {"variants": 4, "simulations": 33})
     tasks = {t.description: t for t in p._p.tasks}
     assert all(t.finished for t in tasks.values())
-    # 4 variants with the original and the minimal fix, 5 stronger values on the accident and the 4
     assert tasks["validation"].fields["count"] == "33 sims" and tasks["diff"].fields["count"] == "done"
     assert "0/?" not in err.getvalue()
 
