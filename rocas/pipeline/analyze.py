@@ -663,11 +663,12 @@ def _phase_validation(run: _Run, fix: dict[str, float], module: str | None) -> d
     variants = perturbed_variants(run.scenario, run.cfg.validation_variants, run.cfg.seed)
     n = len(variants)
     stronger = stronger_fixes(fix, run.cyber_space(module)) if n else []
+    configs = [params_tuple(fix)] + [params_tuple(values) for _, values in stronger]
     tasks = [VariantTask(v, (), v.seed) for v in variants] + \
-        [VariantTask(v, params_tuple(fix), v.seed) for v in variants]
-    for _, values in stronger:
-        tasks.append(VariantTask(run.scenario, params_tuple(values), run.scenario.seed))
-        tasks += [VariantTask(v, params_tuple(values), v.seed) for v in variants]
+        [VariantTask(v, configs[0], v.seed) for v in variants]
+    for params in configs[1:]:
+        tasks.append(VariantTask(run.scenario, params, run.scenario.seed))
+        tasks += [VariantTask(v, params, v.seed) for v in variants]
     run.progress("validation", {"variants": n, "simulations": len(tasks)})
     res = evaluate(run.executor, tasks, run.cfg.batch_size)
 

@@ -74,7 +74,7 @@ def _scope_run(report: dict[str, Any], found: dict[str, Any], marks: dict[str, b
             "cyber_evaluations": report["evaluations"].get("cyber"),
             "cyber_seconds": report["timings_s"].get("cyber"),
             "parameters": report["search_space"]["parameters_searched"],
-            "found": [m["parameter"] for m in report["misconfiguration"]],
+            "found": found["parameters"],
             "changes": found["changes"],
             # the scope and the search decide the parameter, not the module (that is the diff's)
             "parameter_hit": marks["parameter"],
