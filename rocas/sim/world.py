@@ -418,10 +418,10 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     """Project points (any shape) on the ego reference line.
 
     Points farther from the line than its grid reaches (about 12 m) have no nearest point; they
-    are projected on the tangent at the line's last point, as before, but their lateral offset
-    is FAR_LATERAL_M (with the projection's sign), so that no caller takes them for something
-    beside the path. Without this, on a curved route a vehicle on a road the ego never comes
-    near could project to a few metres beside the path just ahead.
+    are projected on the tangent at the line's last point, and their lateral offset is
+    FAR_LATERAL_M (with the projection's sign), so that no caller takes them for something
+    beside the path: measured on that tangent, on a curved route a vehicle on a road the ego
+    never comes near could land a few metres beside the path just ahead.
 
     Returns:
         (index of the nearest reference point, arc length s [m], signed lateral offset [m],
