@@ -24,6 +24,8 @@ from rocas.errors import RecordingError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
 
+REORDER_WINDOW_S = 1.0  # how far out of log-time order a message may be written for one pass [s]
+
 
 @dataclass(frozen=True)
 class ChannelDiff:
@@ -193,7 +195,7 @@ def diff(
 
     res = compute_series(
         rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
-        adjacent_pairing=not strict_bins,
+        reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins,
     )
     if sum(res.messages_read) == 0:
         damage = rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference))
@@ -233,6 +235,14 @@ def diff(
     warnings += tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
     )
+    if res.reorder_window_s > REORDER_WINDOW_S:
+        warnings += tuple(
+            f"{path}: messages are written up to {late:.1f} s out of log-time order; paired "
+            f"with a {res.reorder_window_s:.1f} s reorder window instead of "
+            f"{REORDER_WINDOW_S:g} s (more memory, another pass over the files)"
+            for path, late in zip((accident, reference), res.disorder_s, strict=True)
+            if late > REORDER_WINDOW_S
+        )
     return DiffResult(
         accident=str(accident),
         reference=str(reference),

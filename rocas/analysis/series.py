@@ -1,15 +1,17 @@
 """MDR series: two recordings streamed side by side, binned in time, channel by channel.
 
-Both recordings are aligned at their first message (t = 0): the earliest log time in the
-file's summary statistics, or the first message read when the file has no summary (a
-truncated log). Time is cut into bins of ``bin_s`` seconds, centred on multiples of
+Both recordings are aligned at their first message (t = 0): the earliest log time, from the
+file's summary statistics, or, when the file has no summary (a log still being written or cut
+short), the earliest log time among the messages read in the first reorder window. Time is
+cut into bins of ``bin_s`` seconds, centred on multiples of
 ``bin_s`` (bin j covers [(j - 1/2) bin_s, (j + 1/2) bin_s)): a periodic channel whose period
 is a multiple of the bin width, published in phase with the first message (the common
 case, e.g. 10 Hz with 0.1 s bins), then sits mid-bin, and timing jitter does not push its
 messages across a bin edge in one recording only. Within a bin, the k-th message
-of a channel in one recording pairs with the k-th message of that channel in the other;
-a message without a partner scores 1; the bin's MDR is the mean over its messages.
-Bins in which neither recording has a message on the channel carry no value.
+of a channel in one recording, in log-time order (file order breaks ties), pairs with the k-th
+message of that channel in the other, so two files that hold the same messages in a
+different file order diff to zero; a message without a partner scores 1; the bin's MDR is
+the mean over its messages. Bins in which neither recording has a message on the channel carry no value.
 
 One refinement, on unless ``adjacent_pairing=False`` (``--strict-bins``): messages left
 unpaired in bin j pair, in order, with the *other* recording's messages left unpaired in
@@ -18,17 +20,27 @@ lands on different sides of the edge in the two runs; without this, such a chann
 1 in almost every bin and its real deviation is invisible. The pair's MDR counts in bin j.
 
 Memory stays flat: only the bins within ``reorder_window_s`` of the slower stream's
-position are held.
+position are held. MCAP does not require file order to follow log time, and a pipeline may
+write one channel late (a buffered logger, a channel appended after the run). A message
+that arrives for a bin already scored would be scored on its own, unpaired; instead the pass
+stops and starts again with a window wide enough for it (at least twice as wide), so the
+series never depend on file order. Files in log-time order, like every file rocas writes,
+take one pass; ``SeriesResult.disorder_s`` says how far each file strays and
+``reorder_window_s`` which window the result needed.
 """
 
 from __future__ import annotations
 
+import itertools
+import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from google.protobuf import descriptor_pb2
+from google.protobuf.message import DecodeError
 
 from rocas.analysis.mdr import EXACT, Tolerance, mdr
 from rocas.errors import RecordingError
@@ -118,15 +130,26 @@ class SeriesResult:
         channels: topic -> (accident ChannelInfo | None, reference ChannelInfo | None).
         messages_read: (accident, reference) decoded message counts.
         bin_s: bin width [s].
+        disorder_s: (accident, reference) the most any message's log time lies behind a
+            message read before it in the same file [s]; 0 for a file in log-time order.
+        reorder_window_s: the reorder window the result was computed with [s]: the one
+            asked for, or a wider one when a file's disorder needed it.
     """
 
     series: dict[str, ChannelSeries]
     channels: dict[str, tuple[ChannelInfo | None, ChannelInfo | None]]
     messages_read: tuple[int, int]
     bin_s: float
+    disorder_s: tuple[float, float] = (0.0, 0.0)
+    reorder_window_s: float = 1.0
 
 
+class _TooLate(Exception):
+    """A message arrived for a bin already scored; ``window_s`` would have held it."""
 
+    def __init__(self, window_s: float) -> None:
+        super().__init__(window_s)
+        self.window_s = window_s
 
 def compute_series(
     accident: Recording,
@@ -139,23 +162,85 @@ def compute_series(
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
+    ``reorder_window_s`` is how far behind in log time a message may arrive (file order)
+    and still be paired in one pass; a file that strays further costs another pass with a
+    window wide enough for it (module docstring).
+
     Raises:
         RecordingError: a topic's schema differs between the two files.
     """
     if not (bin_s > 0 and math.isfinite(bin_s)):
         raise ValueError("bin_s must be a positive number of seconds")
-    window_bins = max(1, math.ceil(reorder_window_s / bin_s))
-    starts = [accident.summary_start_time_ns(), reference.summary_start_time_ns()]
+    if not (reorder_window_s > 0 and math.isfinite(reorder_window_s)):
+        raise ValueError("reorder_window_s must be a positive number of seconds")
+    window_s = reorder_window_s
+    while True:
+        try:
+            return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing)
+        except _TooLate as late:
+            # each pass at least doubles the window: once it spans the files' log times
+            # nothing can be late, so the loop ends
+            window_s = max(2.0 * window_s, late.window_s)
+
+
+def _aligned(
+    stream: Iterator[DecodedMessage], start_ns: int | None, window_ns: float
+) -> tuple[Iterator[DecodedMessage], int | None]:
+    """The stream and its t = 0: the summary's start, or the earliest log time in the window.
+
+    Without a summary the first message read need not be the earliest; the messages up to
+    ``window_ns`` after it are read ahead (and replayed) to find the earliest among them.
+    """
+    if start_ns is not None:
+        return stream, start_ns
+    ahead: list[DecodedMessage] = []
+    for msg in stream:
+        ahead.append(msg)
+        if msg.log_time_ns > ahead[0].log_time_ns + window_ns:
+            break
+    if not ahead:
+        return stream, None
+    return itertools.chain(ahead, stream), min(m.log_time_ns for m in ahead)
+
+
+def _one_pass(
+    accident: Recording,
+    reference: Recording,
+    bin_s: float,
+    tolerance: Tolerance,
+    window_s: float,
+    adjacent_pairing: bool,
+) -> SeriesResult:
+    """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short."""
+    window_bins = max(1, math.ceil(window_s / bin_s))
+    window_ns = window_bins * bin_s * 1e9
     channels: dict[str, list[ChannelInfo | None]] = {}
-    open_bins: dict[int, dict[str, tuple[list[Any], list[Any]]]] = {}
+    # bin -> topic -> (accident, reference) entries (log time, arrival, message)
+    open_bins: dict[int, dict[str, tuple[list[tuple[int, int, Any]], list[tuple[int, int, Any]]]]] = {}
     acc: dict[str, _Acc] = {}
     read = [0, 0]
+    latest = [-math.inf, -math.inf]
+    disorder_ns = [0.0, 0.0]
     bin_ns = bin_s * 1e9
+    scored_below = 0  # every bin below this one has been scored
+
+    streams: list[Iterator[DecodedMessage]] = []
+    starts: list[int | None] = []
+    for rec in (accident, reference):
+        stream, start = _aligned(rec.decoded(), rec.summary_start_time_ns(), window_ns)
+        streams.append(stream)
+        starts.append(start)
 
     def bin_of(side: int, msg: DecodedMessage) -> int:
-        if starts[side] is None:
-            starts[side] = msg.log_time_ns
-        return max(0, math.floor((msg.log_time_ns - starts[side]) / bin_ns + 0.5))
+        start = starts[side]
+        assert start is not None  # a stream with a message has a start
+        b = math.floor((msg.log_time_ns - start) / bin_ns + 0.5)
+        if b < scored_below:
+            # earlier than bins already scored (or than t = 0): a window as wide as this
+            # file's disorder so far (plus rounding) holds it
+            behind = latest[side] - msg.log_time_ns
+            raise _TooLate(behind / 1e9 + 2 * bin_s if math.isfinite(behind) else 0.0)
+        return b
 
     def note_channel(side: int, info: ChannelInfo) -> None:
         pair = channels.get(info.topic)
@@ -164,24 +249,25 @@ def compute_series(
         known = pair[side]
         if known is None or known.id != info.id:
             other = pair[1 - side]
-            if other is not None and (
-                other.schema_name != info.schema_name or other.schema_data != info.schema_data
-                or other.message_encoding != info.message_encoding
-            ):
+            if other is not None and not _same_schema(other, info):
+                a_info, b_info = (info, other) if side == ACCIDENT else (other, info)
                 raise RecordingError(
                     f"channel {info.topic} has a different schema in the two recordings "
-                    f"({_schema_label(pair[ACCIDENT] or info)} vs "
-                    f"{_schema_label(pair[REFERENCE] or info)})",
+                    f"({_schema_difference(a_info, b_info)})",
                     "compare recordings of the same stack version",
                 )
             pair[side] = info
 
     def flush(below: int) -> None:
+        nonlocal scored_below
         for b in sorted(k for k in open_bins if k < below):
             for topic, (xs, ys) in open_bins.pop(b).items():
-                acc.setdefault(topic, _Acc()).add_bin(b, xs, ys, tolerance, adjacent_pairing)
+                xs.sort(key=_entry_order)
+                ys.sort(key=_entry_order)
+                acc.setdefault(topic, _Acc()).add_bin(
+                    b, [x[2] for x in xs], [y[2] for y in ys], tolerance, adjacent_pairing)
+        scored_below = max(scored_below, below)
 
-    streams: list[Iterator[DecodedMessage]] = [accident.decoded(), reference.decoded()]
     heads: list[DecodedMessage | None] = [next(streams[0], None), next(streams[1], None)]
     head_bins = [bin_of(s, h) if h is not None else math.inf for s, h in enumerate(heads)]
     since_flush = 0
@@ -192,8 +278,13 @@ def compute_series(
         b = int(head_bins[side])
         note_channel(side, msg.channel)
         slot = open_bins.setdefault(b, {}).setdefault(msg.channel.topic, ([], []))
-        slot[side].append(msg.message)
+        slot[side].append((msg.log_time_ns, read[side], msg.message))
         read[side] += 1
+        t = msg.log_time_ns
+        if t < latest[side]:
+            disorder_ns[side] = max(disorder_ns[side], latest[side] - t)
+        else:
+            latest[side] = t
         nxt = next(streams[side], None)
         heads[side] = nxt
         head_bins[side] = bin_of(side, nxt) if nxt is not None else math.inf
@@ -216,12 +307,11 @@ def compute_series(
         elif pair[REFERENCE] is None:
             only = "accident"
         a = acc.get(topic, _Acc())
-        order = np.argsort(np.asarray(a.bins, dtype=np.int64), kind="stable")
         series[topic] = ChannelSeries(
             topic=topic,
-            times_s=np.asarray(a.bins, dtype=np.float64)[order] * bin_s,
-            mdr=np.asarray(a.values, dtype=np.float64)[order],
-            messages=np.asarray(a.counts, dtype=np.int64).reshape(-1, 2)[order],
+            times_s=np.asarray(a.bins, dtype=np.float64) * bin_s,
+            mdr=np.asarray(a.values, dtype=np.float64),
+            messages=np.asarray(a.counts, dtype=np.int64).reshape(-1, 2),
             only_in=only,
         )
     return SeriesResult(
@@ -229,8 +319,65 @@ def compute_series(
         channels={t: (p[0], p[1]) for t, p in channels.items()},
         messages_read=(read[0], read[1]),
         bin_s=bin_s,
+        disorder_s=(disorder_ns[0] / 1e9, disorder_ns[1] / 1e9),
+        reorder_window_s=window_s,
     )
+
+
+def _entry_order(entry: tuple[int, int, Any]) -> tuple[int, int]:
+    return entry[0], entry[1]
 
 
 def _schema_label(info: ChannelInfo) -> str:
     return f"{info.message_encoding}:{info.schema_name or '<no schema>'}"
+
+
+def _schema_difference(a: ChannelInfo, b: ChannelInfo) -> str:
+    la, lb = _schema_label(a), _schema_label(b)
+    if la == lb:
+        return f"{la} in both, defined differently"
+    return f"{la} vs {lb}"
+
+
+def _same_schema(a: ChannelInfo, b: ChannelInfo) -> bool:
+    """Whether two channels carry the same message type, as defined by their schemas.
+
+    Equal bytes are the same schema. Otherwise a protobuf schema is compared as the
+    definitions of the message's file and the files it imports, whatever their order in the
+    FileDescriptorSet (loggers order dependencies differently), and a JSON schema as JSON.
+    """
+    if (a.message_encoding, a.schema_encoding, a.schema_name) != (
+        b.message_encoding, b.schema_encoding, b.schema_name
+    ):
+        return False
+    if a.schema_data == b.schema_data:
+        return True
+    ca, cb = _canonical_schema(a), _canonical_schema(b)
+    return ca is not None and ca == cb
+
+
+def _canonical_schema(info: ChannelInfo) -> object | None:
+    """An order-free form of the schema, or None when it cannot be read."""
+    try:
+        if info.schema_encoding == "protobuf":
+            fds = descriptor_pb2.FileDescriptorSet.FromString(info.schema_data)
+            files = {f.name: f for f in fds.file}
+            root = next(
+                f.name for f in fds.file for m in f.message_type
+                if info.schema_name == ".".join(filter(None, (f.package, m.name)))
+                or info.schema_name.startswith(".".join(filter(None, (f.package, m.name))) + ".")
+            )
+            needed, todo = set(), [root]
+            while todo:
+                name = todo.pop()
+                if name not in needed:
+                    needed.add(name)
+                    todo.extend(files[name].dependency)
+            return tuple(
+                (name, files[name].SerializeToString(deterministic=True)) for name in sorted(needed)
+            )
+        if info.schema_encoding == "jsonschema":
+            return json.dumps(json.loads(info.schema_data), sort_keys=True)
+    except (StopIteration, KeyError, ValueError, DecodeError):
+        return None
+    return None

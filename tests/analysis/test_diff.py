@@ -61,3 +61,37 @@ def test_same_inputs_same_result(tmp_path):
     a = diff(pair.accident, pair.reference).to_json()
     b = diff(pair.accident, pair.reference).to_json()
     assert a == b
+
+
+def test_a_file_far_out_of_log_time_order_diffs_to_zero_with_a_warning(tmp_path):
+    from mcap.writer import Writer
+    from mcap_protobuf.schema import build_file_descriptor_set
+
+    from rocas.msgs import control_pb2
+    from rocas.recording import topology_metadata
+
+    def write(path, late):
+        fds = build_file_descriptor_set(control_pb2.ControlCommand).SerializeToString()
+        entries = [(topic, k) for k in range(600) for topic in ("/cmd", "/echo")]
+        if late:  # /echo written after everything else, 60 s late at the start
+            entries = [e for e in entries if e[0] == "/cmd"] + [e for e in entries if e[0] == "/echo"]
+        with open(path, "wb") as f:
+            w = Writer(f)
+            w.start()
+            sid = w.register_schema("rocas.control.ControlCommand", "protobuf", fds)
+            ids = {"/cmd": w.register_channel("/cmd", "protobuf", sid, topology_metadata(
+                       writers=["ctrl"], readers=[], role="control")),
+                   "/echo": w.register_channel("/echo", "protobuf", sid, topology_metadata(
+                       writers=["echo"], readers=["ctrl"]))}
+            for topic, k in entries:
+                ns = k * 100_000_000
+                w.add_message(ids[topic], ns, control_pb2.ControlCommand(throttle=k).SerializeToString(), ns)
+            w.finish()
+        return path
+
+    a, b = write(tmp_path / "a.mcap", True), write(tmp_path / "b.mcap", False)
+    res = diff(a, b)
+    assert all(float(c.series.mdr.max()) == 0 for c in res.channels)
+    assert res.pinpoint.deviating_module is None
+    assert any("59.9 s out of log-time order" in w and str(a) in w for w in res.warnings)
+    assert not any(str(b) in w for w in res.warnings)

@@ -88,3 +88,81 @@ def test_series_is_streamed_in_bounded_windows(tmp_path):
     s = _series(tmp_path, a, b).series["/control"]
     assert len(s.mdr) == 601  # bins are centred: 0.0 holds [-0.05, 0.05), 60.0 a half bin
     assert s.mdr[:300].max() == 0 and s.mdr[301:].min() == pytest.approx(1 / N_FIELDS)
+
+
+def _write_raw(path, entries, *, fds=None, statistics=True):
+    """Write ``entries`` = [(topic, log time s, throttle)] in the given file order."""
+    from mcap.writer import Writer
+    from mcap_protobuf.schema import build_file_descriptor_set
+
+    fds = fds or build_file_descriptor_set(control_pb2.ControlCommand)
+    with open(path, "wb") as f:
+        w = Writer(f, use_statistics=statistics, use_summary_offsets=statistics)
+        w.start()
+        sid = w.register_schema("rocas.control.ControlCommand", "protobuf", fds.SerializeToString())
+        ids = {}
+        for topic, t, v in entries:
+            if topic not in ids:
+                ids[topic] = w.register_channel(topic, "protobuf", sid)
+            ns = int(round(t * S))
+            w.add_message(ids[topic], ns, control_pb2.ControlCommand(throttle=v).SerializeToString(), ns)
+        w.finish()
+    return path
+
+
+def test_a_channel_written_after_the_rest_pairs_as_if_in_log_time_order(tmp_path):
+    times = [round(0.1 * k, 1) for k in range(100)]
+    ordered = [(topic, t, t) for t in times for topic in ("/a", "/b")]
+    late = [e for e in ordered if e[0] == "/a"] + [e for e in ordered if e[0] == "/b"]  # /b 10 s late
+    a = _write_raw(tmp_path / "a.mcap", late)
+    b = _write_raw(tmp_path / "b.mcap", ordered)
+    res = _series(tmp_path, a, b)
+    for topic in ("/a", "/b"):
+        s = res.series[topic]
+        assert len(s.times_s) == 100 and np.all(np.diff(s.times_s) > 0)  # no bin twice
+        assert np.all(s.mdr == 0)
+    assert res.disorder_s[0] == pytest.approx(9.9) and res.disorder_s[1] == 0
+    assert res.reorder_window_s >= 9.9
+    in_order = _series(tmp_path, b, b)
+    assert in_order.reorder_window_s == 1.0 and in_order.disorder_s == (0, 0)
+
+
+def test_messages_pair_in_log_time_order_whatever_the_file_order(tmp_path):
+    # two messages a bin on one channel; the second file writes each bin's pair swapped
+    pairs = [((k * 0.1, k), (k * 0.1 + 0.02, k + 100)) for k in range(30)]
+    a = _write_raw(tmp_path / "a.mcap", [("/c", t, v) for p in pairs for t, v in p])
+    b = _write_raw(tmp_path / "b.mcap", [("/c", t, v) for p in pairs for t, v in reversed(p)])
+    assert np.all(_series(tmp_path, a, b).series["/c"].mdr == 0)
+
+
+def test_a_file_without_summary_aligns_at_its_earliest_message_not_its_first(tmp_path):
+    entries = [("/c", 1.0 + 0.1 * k, k) for k in range(40)]
+    early_last = entries[3:] + entries[:3]  # the first 0.3 s written after the rest
+    a = _write_raw(tmp_path / "a.mcap", early_last, statistics=False)
+    b = _write_raw(tmp_path / "b.mcap", entries)
+    assert open_recording(a).summary_start_time_ns() is None
+    s = _series(tmp_path, a, b).series["/c"]
+    assert np.all(s.mdr == 0) and s.times_s[0] == 0 and len(s.times_s) == 40
+
+
+def test_protobuf_schemas_compare_by_definition_not_by_file_order(tmp_path):
+    from google.protobuf import descriptor_pb2
+    from mcap_protobuf.schema import build_file_descriptor_set
+
+    fds = build_file_descriptor_set(control_pb2.ControlCommand)
+    assert len(fds.file) > 1
+    rev = descriptor_pb2.FileDescriptorSet()
+    rev.file.extend(reversed(list(fds.file)))
+    a = _write_raw(tmp_path / "a.mcap", [("/c", 0.0, 1)], fds=fds)
+    b = _write_raw(tmp_path / "b.mcap", [("/c", 0.0, 1)], fds=rev)
+    assert np.all(_series(tmp_path, a, b).series["/c"].mdr == 0)
+    # the same name with another definition is still refused, and the message says so
+    changed = descriptor_pb2.FileDescriptorSet()
+    changed.CopyFrom(fds)
+    for f in changed.file:
+        for m in f.message_type:
+            if m.name == "ControlCommand":
+                m.field[0].name = "renamed"
+    c = _write_raw(tmp_path / "c.mcap", [("/c", 0.0, 1)], fds=changed)
+    with pytest.raises(RecordingError, match="ControlCommand in both, defined differently"):
+        _series(tmp_path, a, c)
