@@ -103,6 +103,10 @@ def _ego_from_pose(rec: RecordedRun, scenario_dict: dict[str, Any]) -> dict[str,
             "replay needs the ego's route: record with 'rocas simulate'")
     lanes = {ln["id"]: ln for ln in scenario_dict["lanes"]}
     route = [r for r in route if r in lanes]
+    if not route:
+        raise RecordingError(
+            f"{rec.path}: none of the lanes /localization/pose names is in the map of "
+            "rocas/world.json", "the pose's lane_id must name lanes of the recorded world")
     pts = np.vstack([np.asarray(lanes[r]["points"], dtype=np.float64) for r in route])
     p = rec.ego_track[0, :2]
     s, lat, _ = project(pts, p)

@@ -23,7 +23,8 @@ from rocas.ads.topics import (
     WORLD_ATTACHMENT,
 )
 from rocas.errors import RecordingError
-from rocas.recording.reader import open_recording
+from rocas.msgs import localization_pb2, perception_pb2
+from rocas.recording.reader import ChannelInfo, open_recording
 from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
 
 _NS = 1e-9
@@ -99,6 +100,7 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
     lanes: list[str] = []
     frames: list[tuple[float, Any, tuple[float, float, float] | None]] = []
     for m in rec.decoded({TOPIC_POSE, TOPIC_OBSTACLES}):
+        _check_type(path, m.channel)
         t = m.log_time_ns * _NS
         msg = m.message
         if m.channel.topic == TOPIC_POSE:
@@ -134,6 +136,14 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
         world = json.loads(world_bytes)
     except ValueError as exc:
         raise RecordingError(f"{path}: {WORLD_ATTACHMENT} is not valid JSON ({exc})") from exc
+    lanes_ok = isinstance(world, dict) and isinstance(world.get("lanes"), list) and all(
+        isinstance(ln, dict) and "id" in ln and "points" in ln for ln in world["lanes"])
+    if not lanes_ok or not world["lanes"]:
+        raise RecordingError(
+            f"{path}: {WORLD_ATTACHMENT} holds no map (a JSON object with a non-empty 'lanes' "
+            "list of lanes with 'id' and 'points')",
+            "replay needs the world in rocas's scenario format (docs/scenarios.md), as "
+            "'rocas simulate' writes it")
     meta = dict(rec.metadata)
     pose = np.asarray(pose_rows, dtype=np.float64)
     order = np.argsort(pose[:, 0], kind="stable")
@@ -146,6 +156,22 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
                        run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
                        ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
                        perception_period_s=period if period > 0 else 0.1)
+
+
+_REPLAY_TYPES = {TOPIC_POSE: localization_pb2.LocalizationEstimate.DESCRIPTOR.full_name,
+                 TOPIC_OBSTACLES: perception_pb2.PerceptionObstacles.DESCRIPTOR.full_name}
+
+
+def _check_type(path: str, channel: ChannelInfo) -> None:
+    """Refuse a replay channel that carries another message type than rocas's own."""
+    want = _REPLAY_TYPES[channel.topic]
+    if channel.message_encoding != "protobuf" or channel.schema_name != want:
+        found = f"{channel.message_encoding}:{channel.schema_name or '<no schema>'}"
+        raise RecordingError(
+            f"{path}: replay reads {channel.topic} as protobuf:{want}, but the recording's "
+            f"channel carries {found}",
+            "replay rebuilds a scenario from rocas's own channel types; 'rocas diff' works on "
+            "any types")
 
 
 def _detections(frames: list[tuple[float, Any, tuple[float, float, float] | None]],

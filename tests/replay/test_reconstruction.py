@@ -128,3 +128,42 @@ def test_missing_world_attachment(recorded, tmp_path):
     with pytest.raises(RecordingError) as err:
         reconstruct(dst)
     assert WORLD_ATTACHMENT in err.value.message and err.value.hint
+
+
+def _foreign(path, pose_msg, world: bytes, lane="L1"):
+    """Replay's two channels written by another stack: ``pose_msg(k)`` on the pose topic."""
+    from mcap_protobuf.writer import Writer as ProtobufWriter
+
+    from rocas.msgs import perception_pb2
+
+    with open(path, "wb") as f, ProtobufWriter(f) as w:
+        for k in range(20):
+            t = 10**9 + k * 10**8
+            w.write_message(TOPIC_POSE, pose_msg(k), log_time=t, publish_time=t)
+            w.write_message(TOPIC_OBSTACLES, perception_pb2.PerceptionObstacles(),
+                            log_time=t, publish_time=t)
+        w._writer.add_attachment(log_time=10**9, create_time=10**9, name=WORLD_ATTACHMENT,
+                                 media_type="application/json", data=world)
+    return path
+
+
+def test_another_stacks_types_and_a_world_without_map_are_refused_by_name(tmp_path):
+    from google.protobuf import struct_pb2
+
+    from rocas.msgs import localization_pb2
+
+    def pose(k):
+        msg = localization_pb2.LocalizationEstimate(lane_id="L1")
+        msg.pose.position.x = float(k)
+        return msg
+
+    good_map = b'{"lanes": [{"id": "L1", "points": [[0, 0], [100, 0]]}]}'
+    other = _foreign(tmp_path / "other.mcap", lambda k: struct_pb2.Value(number_value=k), good_map)
+    with pytest.raises(RecordingError, match="carries protobuf:google.protobuf.Value"):
+        reconstruct(other)
+    for name, world in (("empty", b"{}"), ("nolanes", b'{"lanes": []}'), ("str", b'"x"')):
+        with pytest.raises(RecordingError, match="holds no map"):
+            reconstruct(_foreign(tmp_path / f"{name}.mcap", pose, world))
+    elsewhere = _foreign(tmp_path / "elsewhere.mcap", pose, good_map.replace(b"L1", b"L9"))
+    with pytest.raises(RecordingError, match="none of the lanes"):
+        reconstruct(elsewhere)
