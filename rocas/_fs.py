@@ -1,15 +1,22 @@
 """Atomic file output: write to a temporary sibling, rename into place on success.
 
-An interrupted command never leaves a half-written file under the final name.
+An interrupted command never leaves a half-written file under the final name. A destination
+that cannot be written (a directory, a read-only or missing place, a full disk) raises
+:class:`~rocas.errors.OutputError`; :func:`check_writable` finds that out before a long job.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from rocas.errors import OutputError
+
+_FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
 
 
 @contextlib.contextmanager
@@ -18,20 +25,58 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
     On any exception (including KeyboardInterrupt) the temporary file is removed and
     ``path`` is left as it was.
+
+    Raises:
+        OutputError: ``path`` is a directory, its folder cannot be made or written, or the
+            disk fills up while writing.
     """
     final = Path(path)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent)
+    tmp_path = _temporary_beside(final)
+    try:
+        yield tmp_path
+        try:
+            os.replace(tmp_path, final)
+        except OSError as exc:
+            raise _output_error(final, exc) from exc
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        if isinstance(exc, OSError) and exc.errno in _FULL:
+            raise _output_error(final, exc) from exc
+        raise
+
+
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Fail now, not after a long job, if ``path`` cannot be written atomically.
+
+    Creates (and removes) the temporary sibling the real write will use; any folder it had
+    to create stays.
+
+    Raises:
+        OutputError: as :func:`atomic_path`.
+    """
+    _temporary_beside(Path(path)).unlink()
+
+
+def _temporary_beside(final: Path) -> Path:
+    if final.is_dir():
+        raise OutputError(f"cannot write {final}: it is a directory",
+                          "give a file name, e.g. " + str(final / "out"))
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent)
+    except OSError as exc:
+        raise _output_error(final, exc) from exc
     os.close(fd)
     tmp_path = Path(tmp)
     os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
-    try:
-        yield tmp_path
-        os.replace(tmp_path, final)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp_path.unlink()
-        raise
+    return tmp_path
+
+
+def _output_error(final: Path, exc: OSError) -> OutputError:
+    reason = exc.strerror or type(exc).__name__
+    return OutputError(f"cannot write {final}: {reason}",
+                       "free some space" if exc.errno in _FULL else "choose a writable place")
 
 
 def _umask() -> int:

@@ -41,9 +41,14 @@ class NotReproducedError(RocasError):
     """Replay did not reproduce the recorded accident."""
 
 
+class OutputError(RocasError):
+    """An output (file, directory, ``.rrd``) cannot be written where it was asked for."""
+
+
 __all__ = [
     "InputError",
     "NotReproducedError",
+    "OutputError",
     "RecordingError",
     "RocasError",
     "ScenarioError",

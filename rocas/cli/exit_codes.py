@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from rocas.errors import InputError, NotReproducedError, RocasError, UsageError
+from rocas.errors import InputError, NotReproducedError, OutputError, RocasError, UsageError
 
 
 class ExitStatus(IntEnum):
@@ -15,6 +15,7 @@ class ExitStatus(IntEnum):
     USAGE = 2  # bad command line or inconsistent options
     INPUT = 3  # a missing, unreadable or malformed input file
     NOT_REPRODUCED = 4  # replay did not reproduce the accident
+    OUTPUT = 5  # an output cannot be written where it was asked for
     INTERRUPTED = 130  # Ctrl-C
 
 
@@ -28,6 +29,8 @@ def exit_status_for(exc: BaseException) -> ExitStatus:
         return ExitStatus.INPUT
     if isinstance(exc, NotReproducedError):
         return ExitStatus.NOT_REPRODUCED
+    if isinstance(exc, OutputError):
+        return ExitStatus.OUTPUT
     if isinstance(exc, RocasError):
         return ExitStatus.INPUT
     return ExitStatus.INTERNAL
