@@ -47,8 +47,9 @@ MAX_RECORD_BYTES = 512 << 20
 MAX_CHUNK_BYTES = 512 << 20
 #: Opcodes the MCAP specification defines (0x80 and above are user-defined and skipped).
 _SPEC_OPCODES = frozenset(range(0x01, 0x10))
-# a plausible record header: a spec opcode and a length below 4 GiB
-_CANDIDATE = re.compile(rb"[\x01-\x0f].{4}\x00\x00\x00\x00", re.DOTALL)
+# a plausible record header: a spec opcode and a length below 4 GiB. A look-ahead, so that
+# every offset is tried: a false candidate that overlaps a real header must not hide it.
+_CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
 DECODABLE_ENCODINGS = ("protobuf", "json")
 

@@ -1,4 +1,5 @@
 import json
+import struct
 
 import pytest
 from mcap.reader import make_reader
@@ -125,3 +126,35 @@ def test_the_writer_is_atomic(tmp_path):
             raise RuntimeError("interrupted")
     assert out.read_bytes() == b"previous content"
     assert list(tmp_path.iterdir()) == [out]
+
+
+def _unchunked(path, payloads):
+    """An unchunked JSON recording, one message per payload; returns the message offsets."""
+    with open(path, "wb") as f:
+        w = Writer(f, use_chunking=False)
+        w.start()
+        cid = w.register_channel("/j", "json", w.register_schema("s", "jsonschema", b"{}"))
+        offsets = []
+        for i, data in enumerate(payloads):
+            offsets.append(f.tell())
+            w.add_message(cid, log_time=i, publish_time=i, data=data)
+        w.finish()
+    return offsets
+
+
+def test_resync_tries_candidates_that_overlap_a_real_header(tmp_path):
+    # Each message ends in 0x07, so one byte before every message header reads as a record
+    # header too (opcode 0x07, a length that runs past the file): a resync must try the
+    # real header one byte later instead of skipping past it.
+    payloads = [json.dumps({"i": i, "pad": "x" * 20}).encode() + b" \x07" for i in range(6)]
+    path = tmp_path / "u.mcap"
+    offsets = _unchunked(path, payloads)
+    data = bytearray(path.read_bytes())
+    struct.pack_into("<Q", data, offsets[2] + 1, 1 << 40)  # message 2's length is corrupted
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    rec = open_recording(bad)
+    seqs = [m.log_time_ns for m in rec.messages()]
+    assert seqs == [0, 1, 3, 4, 5]  # only the damaged message is lost
+    ((offset, size, _),) = rec.report.skipped_ranges
+    assert (offset, offset + size) == (offsets[2], offsets[3])
