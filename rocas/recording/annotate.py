@@ -129,11 +129,19 @@ def annotated_metadata(
     return out
 
 
-def read_channels(path: str | os.PathLike[str]) -> tuple[list[ChannelInfo], dict[str, int]]:
+def read_channels(
+    path: str | os.PathLike[str], warnings: list[str] | None = None
+) -> tuple[list[ChannelInfo], dict[str, int]]:
     """The channels of a recording and message counts per topic, as fast as possible.
 
     Uses the summary section when the file has one (no pass over the messages); otherwise
     (a truncated or summary-less file) reads the file once with the damage-tolerant reader.
+
+    Args:
+        path: the recording.
+        warnings: when given, the reader's warnings (truncation, skipped damage, one line
+            each, without the ``rocas: warning:`` prefix) are appended to it; a file read
+            from its summary adds none.
 
     Raises:
         InputError: the file is missing or not an MCAP file.
@@ -164,6 +172,8 @@ def read_channels(path: str | os.PathLike[str]) -> tuple[list[ChannelInfo], dict
                 counts[ch.topic] = counts.get(ch.topic, 0) + int(by_id.get(ch.id, 0))
         return infos, counts
     rec.scan()
+    if warnings is not None:
+        warnings.extend(rec.report.warnings(str(path)))
     counts = {t: st.messages for t, st in rec.report.channel_stats.items()}
     return list(rec.channels.values()), counts
 
