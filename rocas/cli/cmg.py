@@ -78,7 +78,11 @@ def build_view(
     recording: str, spec: CmgSpec | None, override: str | None, env: Env | None = None
 ) -> CmgView:
     """Read the recording's channels and explain its topology; warnings go to ``env``."""
-    infos, counts = read_channels(recording)
+    damage: list[str] = []
+    infos, counts = read_channels(recording, damage)
+    if env is not None:
+        for line in damage:  # a truncated file lists only what was read before the cut
+            env.warn(line)
     by_topic: dict[str, list[ChannelInfo]] = {}
     for ch in infos:
         by_topic.setdefault(ch.topic, []).append(ch)

@@ -41,8 +41,13 @@ def has_display(environ: dict[str, str] | None = None) -> bool:
     return bool(env.get("DISPLAY") or env.get("WAYLAND_DISPLAY"))
 
 
-def write_rrd(source: Path, out: Path) -> str:
-    """Write the ``.rrd`` of ``source`` (run directory or recording); returns what it showed."""
+def write_rrd(source: Path, out: Path) -> tuple[str, list[str]]:
+    """Write the ``.rrd`` of ``source`` (run directory or recording).
+
+    Returns:
+        What it showed (one line), and the warnings of the recordings it read (damage,
+        truncation, skipped channels; one line each, without the ``rocas: warning:`` prefix).
+    """
     from rocas.viz.analysis import write_recording_rrd, write_run_dir_rrd
 
     if source.is_dir():
@@ -53,10 +58,10 @@ def write_rrd(source: Path, out: Path) -> str:
             parts.append(f"searches: {', '.join(contents['searches'])}")
         if "verdict_md" in contents:
             parts.append("verdict")
-        return "; ".join(parts)
+        return "; ".join(parts), [w for n in shown for w in contents[n].warnings]
     ex = write_recording_rrd(out, source)
     found = ", ".join(f"{k} from {v}" for k, v in ex.sources.items()) or "no scene channels"
-    return f"{found}; {len(ex.channels)} channels plotted"
+    return f"{found}; {len(ex.channels)} channels plotted", list(ex.warnings)
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
@@ -73,7 +78,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
     else:
         out = keep
     try:
-        summary = write_rrd(source, out)
+        summary, warnings = write_rrd(source, out)
+        for line in warnings:
+            env.warn(line)
         if keep is not None:
             env.out().print(f"Rerun recording: {keep} ({summary})")
         if args.no_viewer:

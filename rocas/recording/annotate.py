@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mcap.exceptions import McapError
+from mcap.exceptions import EndOfFile, McapError
 from mcap.reader import make_reader
 from mcap.records import (
     Attachment,
@@ -41,7 +41,7 @@ from mcap.writer import Writer as McapWriter
 
 from rocas._fs import atomic_path
 from rocas.errors import RecordingError, TopologyError, UsageError
-from rocas.recording.reader import ChannelInfo, open_recording
+from rocas.recording.reader import MAGIC, ChannelInfo, open_recording
 from rocas.recording.topology import (
     CONTROL_ROLE,
     READERS_KEY,
@@ -129,11 +129,19 @@ def annotated_metadata(
     return out
 
 
-def read_channels(path: str | os.PathLike[str]) -> tuple[list[ChannelInfo], dict[str, int]]:
+def read_channels(
+    path: str | os.PathLike[str], warnings: list[str] | None = None
+) -> tuple[list[ChannelInfo], dict[str, int]]:
     """The channels of a recording and message counts per topic, as fast as possible.
 
     Uses the summary section when the file has one (no pass over the messages); otherwise
     (a truncated or summary-less file) reads the file once with the damage-tolerant reader.
+
+    Args:
+        path: the recording.
+        warnings: when given, the reader's warnings (truncation, skipped damage, one line
+            each, without the ``rocas: warning:`` prefix) are appended to it; a file read
+            from its summary adds none.
 
     Raises:
         InputError: the file is missing or not an MCAP file.
@@ -164,6 +172,8 @@ def read_channels(path: str | os.PathLike[str]) -> tuple[list[ChannelInfo], dict
                 counts[ch.topic] = counts.get(ch.topic, 0) + int(by_id.get(ch.id, 0))
         return infos, counts
     rec.scan()
+    if warnings is not None:
+        warnings.extend(rec.report.warnings(str(path)))
     counts = {t: st.messages for t, st in rec.report.channel_stats.items()}
     return list(rec.channels.values()), counts
 
@@ -300,6 +310,30 @@ def _chunk_size(path: Path) -> int:
     return max(ci.uncompressed_size for ci in summary.chunk_indexes)
 
 
+def _damage(exc: BaseException, done: int, size: int, copying: bool, at_end: bool) -> str:
+    """What is wrong with the input, in words, after ``exc`` stopped the copy.
+
+    Args:
+        exc: the exception the mcap library raised.
+        done: where the last complete record ends [byte offset].
+        size: the file's size [bytes].
+        copying: whether the record was being copied (a chunk's inner records) rather than
+            read from the file.
+        at_end: whether reading had reached the end of the file.
+    """
+    if at_end and not copying:  # the mcap library reads short at the end, then fails anywhere
+        if done >= size:
+            return (f"is truncated: it ends at byte {size}, after a complete record but "
+                    "before the end of its data section")
+        return (f"is truncated: it ends at byte {size}, in the middle of the record that "
+                f"starts at byte {done}")
+    if copying and isinstance(exc, EndOfFile):
+        return f"is damaged: a record inside the chunk at byte {done} ends early"
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    what = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return f"is damaged or truncated ({what})"
+
+
 def annotate_recording(
     source: str | os.PathLike[str],
     output: str | os.PathLike[str],
@@ -337,16 +371,21 @@ def annotate_recording(
         copier = _Copier(out, annotations, control_channel, chunk_size)
         reader = StreamReader(f, emit_chunks=True, validate_crcs=True)
         ended = False
+        done = len(MAGIC)  # where the last complete record ends [byte offset]
+        copying = False  # False while a record is being read, True while it is copied
         try:
             for record in reader.records:
+                copying = True
                 if not copier.feed(record):
                     ended = True
                     break
+                copying = False
+                done = f.tell()
         except RecordingError:
             raise
         except (McapError, ValueError, EOFError, OSError, struct.error) as exc:
             raise RecordingError(
-                f"{src} is damaged or truncated ({type(exc).__name__}: {exc}); "
+                f"{src} {_damage(exc, done, rec.size, copying, f.tell() >= rec.size)}; "
                 "annotate copies complete recordings only",
                 f"repair it first with 'mcap recover {src} -o FIXED.mcap'",
             ) from None

@@ -40,15 +40,21 @@ from rocas.recording.decoding import DecoderCache
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD_HEADER = struct.Struct("<BQ")
 _CHUNK_HEAD = struct.Struct("<QQQII")  # start, end, uncompressed_size, crc, compression length
-#: Largest record body (a chunk as stored, a message, ...) rocas loads into memory [bytes].
-#: A longer one is taken for a corrupted length field; attachments are only read on request.
+#: Record body (a chunk as stored, a message, ...) above which a length field needs more
+#: evidence before rocas loads it [bytes]. Every length must fit in the file; a longer one is
+#: loaded only if a plausible record starts where it ends (memory then stays within a few
+#: times the file's size), otherwise it is taken for a corrupted length field. Attachments are
+#: only read on request.
 MAX_RECORD_BYTES = 512 << 20
-#: Largest uncompressed chunk rocas inflates [bytes]; a larger ``uncompressed_size`` is damage.
+#: Uncompressed chunk size rocas always inflates [bytes]; a chunk may inflate to more if that
+#: is still no more than the file's size. A larger ``uncompressed_size`` is skipped as damage
+#: (a corrupted size field or a decompression bomb).
 MAX_CHUNK_BYTES = 512 << 20
 #: Opcodes the MCAP specification defines (0x80 and above are user-defined and skipped).
 _SPEC_OPCODES = frozenset(range(0x01, 0x10))
-# a plausible record header: a spec opcode and a length below 4 GiB
-_CANDIDATE = re.compile(rb"[\x01-\x0f].{4}\x00\x00\x00\x00", re.DOTALL)
+# a plausible record header: a spec opcode and a length below 4 GiB. A look-ahead, so that
+# every offset is tried: a false candidate that overlaps a real header must not hide it.
+_CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
 DECODABLE_ENCODINGS = ("protobuf", "json")
 
@@ -293,9 +299,8 @@ class Recording:
                     self.report.bytes_read = pos
                     continue
                 f.seek(body_start)
-                body = f.read(length)
-                try:
-                    yield from self._handle_record(opcode, body, pos)
+                try:  # no reference kept here: a chunk's stored bytes are freed once inflated
+                    yield from self._handle_record(opcode, f.read(length), pos)
                 except _BadRecord as exc:
                     if opcode == Opcode.CHUNK:
                         self.report.skipped_chunks.append((pos, exc.reason))
@@ -317,10 +322,15 @@ class Recording:
             return f"record at offset {pos} claims {length} bytes but only {remain} remain"
         if opcode == 0 or 0x10 <= opcode < 0x80:
             return f"invalid record opcode {opcode:#04x} at offset {pos}"
-        if opcode in _LOADED_OPCODES and length > MAX_RECORD_BYTES:
+        if (
+            opcode in _LOADED_OPCODES
+            and length > MAX_RECORD_BYTES
+            and not self._plausible(f, pos + _RECORD_HEADER.size + length, depth=1)
+        ):
+            # a long record is real only if the file goes on with records where it ends
             return (
-                f"record at offset {pos} claims {length} bytes, more than rocas loads "
-                f"({MAX_RECORD_BYTES >> 20} MiB)"
+                f"record at offset {pos} claims {length} bytes (over {_amount(MAX_RECORD_BYTES)}) "
+                "but no record starts where it would end"
             )
         if opcode == Opcode.CHUNK and not _chunk_header_ok(_peek(f, pos, 64), length):
             return f"chunk at offset {pos} has inconsistent length fields"
@@ -368,7 +378,12 @@ class Recording:
         stream = ReadDataStream(io.BytesIO(body))
         if opcode == Opcode.CHUNK:
             try:
-                records = _chunk_records(Chunk.read(stream))
+                chunk = Chunk.read(stream)
+                del body, stream  # the chunk holds a copy of its data
+                data = _inflate(chunk, max(MAX_CHUNK_BYTES, self.size))
+                del chunk
+                records = _chunk_records(data)
+                del data
             except Exception as exc:  # any parse failure inside one chunk: skip the chunk
                 raise _BadRecord(offset, _describe(exc)) from exc
             for rec in records:
@@ -555,13 +570,16 @@ def _chunk_header_ok(head: bytes, length: int) -> bool:
     return records_length == length - (_CHUNK_HEAD.size + clen + 8)
 
 
-def _inflate(chunk: Chunk) -> bytes:
-    """The chunk's records, decompressed without trusting its size fields for allocation."""
+def _inflate(chunk: Chunk, limit: int) -> bytes | bytearray:
+    """The chunk's records, decompressed without trusting its size fields for allocation.
+
+    ``limit`` is the largest uncompressed size accepted [bytes].
+    """
     size = chunk.uncompressed_size
-    if size > MAX_CHUNK_BYTES:
+    if size > limit:
         raise ValueError(
             f"chunk claims {size} bytes uncompressed, more than rocas inflates "
-            f"({MAX_CHUNK_BYTES >> 20} MiB)"
+            f"({_amount(limit)}: {_amount(MAX_CHUNK_BYTES)} or the file's size if larger)"
         )
     if chunk.compression == "":
         data = bytes(chunk.data)
@@ -571,14 +589,13 @@ def _inflate(chunk: Chunk) -> bytes:
         reader = zstandard.ZstdDecompressor().stream_reader(
             io.BytesIO(chunk.data), read_across_frames=True
         )
-        parts, got = [], 0
-        while got <= size:  # read in pieces: a lying frame header must not size a buffer
-            piece = reader.read(min(4 << 20, size + 1 - got))
+        out = bytearray()
+        while len(out) <= size:  # read in pieces: a lying frame header must not size a buffer
+            piece = reader.read(min(4 << 20, size + 1 - len(out)))
             if not piece:
                 break
-            parts.append(piece)
-            got += len(piece)
-        data = b"".join(parts)
+            out += piece
+        data = out
     elif chunk.compression == "lz4":
         import lz4.frame
 
@@ -595,9 +612,8 @@ def _inflate(chunk: Chunk) -> bytes:
     return data
 
 
-def _chunk_records(chunk: Chunk) -> list[Schema | Channel | Message]:
-    """Schema, channel and message records inside a chunk; raises on any damage."""
-    data = _inflate(chunk)
+def _chunk_records(data: bytes | bytearray) -> list[Schema | Channel | Message]:
+    """Schema, channel and message records in a chunk's inflated data; raises on any damage."""
     view = memoryview(data)
     out: list[Schema | Channel | Message] = []
     pos, n = 0, len(data)
@@ -625,6 +641,11 @@ class _BadRecord(Exception):
         super().__init__(reason)
         self.offset = offset
         self.reason = reason
+
+
+def _amount(n: int) -> str:
+    """A byte count for messages: whole MiB when it is one, else bytes."""
+    return f"{n >> 20} MiB" if n >= 1 << 20 and n % (1 << 20) == 0 else f"{n} bytes"
 
 
 def _describe(exc: BaseException) -> str:

@@ -107,6 +107,20 @@ def test_cmg_naming_an_absent_channel_warns(bare, tmp_path):
     assert "/ghost" not in out
 
 
+def test_a_truncated_recording_is_reported_on_stderr(tmp_path):
+    path = tmp_path / "full.mcap"
+    with RecordingWriter(path, chunk_size=512) as rec:
+        rec.add_channel("/control", control_pb2.ControlCommand, writers=["control"])
+        for i in range(200):
+            rec.write("/control", control_pb2.ControlCommand(throttle=i), log_time_ns=i)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    code, out, err = run("cmg", str(cut))
+    assert code == 0 and "/control" in out  # what was read before the cut is still shown
+    assert err.startswith(f"rocas: warning: {cut}: recording is truncated (")
+    assert "stopped at offset" in err and len(err.splitlines()) == 1
+
+
 @pytest.mark.parametrize(
     ("argv", "needle"),
     [

@@ -29,6 +29,21 @@ def test_view_of_a_run_dir(rocas, red_truck_recording, tmp_path):
     assert e["/verdict"].static_rows == 1
 
 
+def test_view_warns_about_a_truncated_recording(rocas, red_truck_recording, tmp_path):
+    data = red_truck_recording.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    res = rocas("view", cut, "--rrd", tmp_path / "v.rrd", "--no-viewer")
+    assert res.code == 0 and "Rerun recording" in res.stdout
+    assert res.stderr.startswith("rocas: warning: cut.mcap: recording is truncated (")
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "accident.mcap").write_bytes(cut.read_bytes())
+    res = rocas("view", run, "--rrd", tmp_path / "run.rrd", "--no-viewer")
+    assert res.code == 0
+    assert res.stderr.startswith("rocas: warning: accident.mcap: recording is truncated (")
+
+
 def test_view_errors(rocas, tmp_path):
     res = rocas("view", tmp_path / "missing.mcap", "--no-viewer", "--rrd", tmp_path / "x.rrd")
     assert res.code != 0 and "no such file" in res.stderr

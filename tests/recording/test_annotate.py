@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import struct
 
 import pytest
 from google.protobuf import descriptor_pb2, timestamp_pb2
@@ -52,6 +53,16 @@ def write_foreign(path, *, compression=CompressionType.LZ4, chunked=True, profil
         w.add_attachment(create_time=0, log_time=9, name="map.bin",
                          media_type="application/octet-stream", data=bytes(range(256)) * 8)
         w.finish()
+
+
+def _records(data: bytes) -> list[tuple[int, int]]:
+    """(offset, opcode) of every top-level record of a complete MCAP file."""
+    out, pos = [], 8
+    while pos < len(data) - 8:
+        opcode, length = struct.unpack_from("<BQ", data, pos)
+        out.append((pos, opcode))
+        pos += 9 + length
+    return out
 
 
 def dump(path):
@@ -170,10 +181,33 @@ def test_refusals_leave_no_output(tmp_path):
     assert not dst.exists()
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(src.read_bytes()[: src.stat().st_size // 2])
-    with pytest.raises(RecordingError, match="damaged or truncated") as info:
+    with pytest.raises(RecordingError) as info:
         annotate_recording(cut, dst, {})
+    # was "(EndOfFile: )": the message says what is wrong, in words
+    start = max(off for off, _ in _records(src.read_bytes()) if off < cut.stat().st_size)
+    assert info.value.message == (
+        f"{cut} is truncated: it ends at byte {cut.stat().st_size}, in the middle of the record "
+        f"that starts at byte {start}; annotate copies complete recordings only"
+    )
     assert "mcap recover" in info.value.hint
+    cut.write_bytes(src.read_bytes()[:start])  # ends exactly where a record ends
+    with pytest.raises(RecordingError, match=f"is truncated: it ends at byte {start}, after a "
+                       "complete record but before the end of its data section"):
+        annotate_recording(cut, dst, {})
     assert not dst.exists()
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
     with pytest.raises(InputError, match="no such file"):
         annotate_recording(tmp_path / "missing.mcap", dst, {})
+
+
+def test_damage_inside_a_chunk_is_described_in_words():
+    from mcap.exceptions import EndOfFile
+
+    from rocas.recording.annotate import _damage
+
+    assert _damage(EndOfFile(), 100, 500, copying=True, at_end=False) == (
+        "is damaged: a record inside the chunk at byte 100 ends early"
+    )
+    assert _damage(ValueError(""), 100, 500, copying=False, at_end=False) == (
+        "is damaged or truncated (ValueError)"
+    )

@@ -1,12 +1,14 @@
 import json
+import random
+import struct
 
 import pytest
 from mcap.reader import make_reader
-from mcap.writer import Writer
+from mcap.writer import CompressionType, Writer
 
 from rocas.errors import InputError, RecordingError
 from rocas.msgs import control_pb2, planning_pb2
-from rocas.recording import RecordingWriter, open_recording
+from rocas.recording import RecordingWriter, open_recording, reader
 
 
 def _write(path, n=300, chunk_size=2048, compression="zstd"):
@@ -125,3 +127,89 @@ def test_the_writer_is_atomic(tmp_path):
             raise RuntimeError("interrupted")
     assert out.read_bytes() == b"previous content"
     assert list(tmp_path.iterdir()) == [out]
+
+
+def _unchunked(path, payloads):
+    """An unchunked JSON recording, one message per payload; returns the message offsets."""
+    with open(path, "wb") as f:
+        w = Writer(f, use_chunking=False)
+        w.start()
+        cid = w.register_channel("/j", "json", w.register_schema("s", "jsonschema", b"{}"))
+        offsets = []
+        for i, data in enumerate(payloads):
+            offsets.append(f.tell())
+            w.add_message(cid, log_time=i, publish_time=i, data=data)
+        w.finish()
+    return offsets
+
+
+def test_resync_tries_candidates_that_overlap_a_real_header(tmp_path):
+    # Each message ends in 0x07, so one byte before every message header reads as a record
+    # header too (opcode 0x07, a length that runs past the file): a resync must try the
+    # real header one byte later instead of skipping past it.
+    payloads = [json.dumps({"i": i, "pad": "x" * 20}).encode() + b" \x07" for i in range(6)]
+    path = tmp_path / "u.mcap"
+    offsets = _unchunked(path, payloads)
+    data = bytearray(path.read_bytes())
+    struct.pack_into("<Q", data, offsets[2] + 1, 1 << 40)  # message 2's length is corrupted
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    rec = open_recording(bad)
+    seqs = [m.log_time_ns for m in rec.messages()]
+    assert seqs == [0, 1, 3, 4, 5]  # only the damaged message is lost
+    ((offset, size, _),) = rec.report.skipped_ranges
+    assert (offset, offset + size) == (offsets[2], offsets[3])
+
+
+def _one_big_message(path, payload, chunked):
+    with open(path, "wb") as f:
+        w = Writer(f, use_chunking=chunked, compression=CompressionType.ZSTD)
+        w.start()
+        cid = w.register_channel("/b", "json", w.register_schema("s", "jsonschema", b"{}"))
+        for i in range(3):
+            w.add_message(cid, log_time=i, publish_time=i, data=b"small")
+        w.add_message(cid, log_time=3, publish_time=3, data=payload)
+        w.add_message(cid, log_time=4, publish_time=4, data=b"after")
+        w.finish()
+    return path
+
+
+@pytest.mark.parametrize("chunked", [True, False])
+def test_a_record_over_the_memory_limit_is_read_when_it_fits_the_file(
+    tmp_path, monkeypatch, chunked
+):
+    # the limits stand for 512 MiB: a 10 KiB message plays a 600 MiB one
+    monkeypatch.setattr(reader, "MAX_RECORD_BYTES", 4096)
+    monkeypatch.setattr(reader, "MAX_CHUNK_BYTES", 4096)
+    payload = random.Random(0).randbytes(10_000)  # incompressible: the file holds it all
+    rec = open_recording(_one_big_message(tmp_path / "big.mcap", payload, chunked))
+    msgs = list(rec.messages())
+    assert [m.log_time_ns for m in msgs] == [0, 1, 2, 3, 4]
+    assert msgs[3].data == payload
+    assert rec.report.complete and rec.report.warnings("big") == []
+
+
+def test_a_long_length_that_ends_inside_a_record_is_still_damage(tmp_path, monkeypatch):
+    monkeypatch.setattr(reader, "MAX_RECORD_BYTES", 4096)
+    payloads = [json.dumps({"i": i, "pad": "x" * 1000}).encode() for i in range(8)]
+    path = tmp_path / "u.mcap"
+    offsets = _unchunked(path, payloads)
+    data = bytearray(path.read_bytes())
+    struct.pack_into("<Q", data, offsets[1] + 1, 5000)  # fits in the file, ends mid-record
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    rec = open_recording(bad)
+    assert [m.log_time_ns for m in rec.messages()] == [0, 2, 3, 4, 5, 6, 7]
+    ((offset, size, reason),) = rec.report.skipped_ranges
+    assert (offset, offset + size) == (offsets[1], offsets[2])
+    assert "claims 5000 bytes (over 4096 bytes) but no record starts where it would end" in reason
+
+
+def test_a_chunk_inflating_beyond_the_limit_and_the_file_size_is_skipped(tmp_path, monkeypatch):
+    monkeypatch.setattr(reader, "MAX_CHUNK_BYTES", 4096)
+    path = _one_big_message(tmp_path / "z.mcap", bytes(10_000), chunked=True)
+    assert path.stat().st_size < 10_000  # zeros compress: the chunk inflates past the file
+    rec = open_recording(path)
+    assert list(rec.messages()) == []
+    ((_, reason),) = rec.report.skipped_chunks
+    assert "more than rocas inflates (4096 bytes: 4096 bytes or the file's size" in reason
