@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from rocas._fs import check_writable
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
@@ -64,6 +65,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
             raise InputError(f"no such file: {source}", "check the path")
         name = source.stem
     out = Path(args.out) if args.out else Path("runs") / name
+    if args.rrd:
+        check_writable(args.rrd)  # before minutes of work, not after
     progress = _Progress(env, {"physical": cfg.budget, "cyber": cfg.budget,
                                "validation": validation_simulations(cfg.validation_variants)})
     try:

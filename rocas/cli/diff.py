@@ -6,6 +6,7 @@ import argparse
 import json
 from typing import TYPE_CHECKING
 
+from rocas._fs import check_writable
 from rocas.cli.console import Env
 
 if TYPE_CHECKING:
@@ -127,6 +128,8 @@ def render(result: DiffResult, env: Env) -> None:
 def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.analysis.diff import diff
 
+    if args.rrd:
+        check_writable(args.rrd)
     result = diff(
         args.accident,
         args.reference,

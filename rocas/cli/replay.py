@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from rocas._fs import check_writable
 from rocas.cli.console import Env
 from rocas.errors import NotReproducedError, UsageError
 
@@ -37,6 +38,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
     if args.output is not None and not str(args.output).endswith(".mcap"):
         raise UsageError(f"output {args.output!r} should end in .mcap")
+    if args.output is not None:
+        check_writable(args.output)
     overrides = dict(parse_assignment(a) for a in args.assignments)
     report = replay(args.recording, overrides or None, output=args.output)
     rec = report.reconstruction

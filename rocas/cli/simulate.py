@@ -6,6 +6,7 @@ import argparse
 import dataclasses
 import json
 
+from rocas._fs import check_writable
 from rocas.cli.console import Env
 from rocas.errors import UsageError
 
@@ -39,6 +40,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         raise UsageError(f"output {args.output!r} should end in .mcap")
     if args.seed is not None and args.seed < 0:
         raise UsageError("--seed must be >= 0")
+    check_writable(args.output)
     scenario = resolve_scenario(args.scenario)
     if args.duration is not None:
         if not 0 < args.duration <= 600:

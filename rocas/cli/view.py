@@ -14,6 +14,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from rocas._fs import check_writable
 from rocas.cli.console import Env
 from rocas.errors import InputError, UsageError
 
@@ -71,6 +72,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
     if args.no_viewer and not args.rrd:
         raise UsageError("--no-viewer needs --rrd OUT.rrd")
     keep = Path(args.rrd) if args.rrd else None
+    if keep is not None:
+        check_writable(keep)
     tmpdir = None
     if keep is None:
         tmpdir = tempfile.TemporaryDirectory(prefix="rocas-view-")

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from rocas._fs import write_text_atomic
-from rocas.errors import UsageError
+from rocas._fs import check_writable, write_text_atomic
+from rocas.errors import OutputError, UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.pipeline.evaluate import (
     VariantResult,
@@ -217,9 +217,17 @@ def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig) ->
             raise UsageError(f"run directory {out} holds an analysis of other inputs or settings",
                              "choose another --out, or resume with the same input and options")
         return state
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"cannot make run directory {out}: a file of that name exists",
+                          "choose another --out")
     if out.exists() and any(out.iterdir()):
         raise UsageError(f"{out} exists and is not a rocas run directory", "choose another --out")
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        check_writable(out / "state.json")
+    except OSError as exc:
+        raise OutputError(f"cannot make run directory {out}: {exc.strerror or exc}",
+                          "choose a writable place for --out") from exc
     return {"version": 1, "source": source, "config": config, "done": {}, "timings_s": {},
             "evaluations": {}}
 
