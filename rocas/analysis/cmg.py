@@ -18,8 +18,10 @@ The CMG JSON format::
     {"modules": {"planning": {"reads": ["/prediction"], "writes": ["/planning"]}},
      "control_channel": "/control"}            # optional
 
-``rocas cmg REC --format json`` prints this format plus a ``"channels"`` list (per-channel
-sources); that list is informational and ignored when the file is read back as ``--cmg``.
+``rocas cmg REC --format json`` prints this format plus the informational keys
+``"channels"`` (per-channel sources), ``"recording"``, ``"control_source"``, ``"notes"`` and
+``"hints"``; they are accepted and ignored when the file is read back as ``--cmg``, so the
+output feeds straight back in. Any other key is refused (it is most likely a typo).
 """
 
 from __future__ import annotations
@@ -131,12 +133,16 @@ def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
     return parse_cmg(data, str(p))
 
 
+# keys ``rocas cmg --format json`` adds to the --cmg format; read back, they are ignored
+INFORMATIVE_KEYS = frozenset({"channels", "recording", "control_source", "notes", "hints"})
+
+
 def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:
-    """Validate a decoded CMG JSON document."""
+    """Validate a decoded CMG JSON document (the keys in ``INFORMATIVE_KEYS`` are ignored)."""
     hint = 'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}'
     if not isinstance(data, dict) or not isinstance(data.get("modules"), dict):
         raise InputError(f"{origin}: key 'modules' must be an object of modules", hint)
-    unknown = set(data) - {"modules", "control_channel", "channels"}
+    unknown = set(data) - {"modules", "control_channel"} - INFORMATIVE_KEYS
     if unknown:
         raise InputError(f"{origin}: unknown key {sorted(unknown)[0]!r}", hint)
     writes: dict[str, tuple[str, ...]] = {}

@@ -112,6 +112,15 @@ def test_json_output_reads_back_as_a_cmg_file(tmp_path):
     assert control_channel(again, None, spec) == "/cmd"
 
 
+def test_the_keys_rocas_cmg_adds_are_ignored_when_read_back():
+    spec = parse_cmg({
+        "modules": {"m": {"writes": ["/cmd"]}}, "control_channel": "/cmd",
+        "channels": [], "recording": "r.mcap", "control_source": "metadata",
+        "notes": ["a note"], "hints": [],
+    })
+    assert spec.writes == {"m": ("/cmd",)} and spec.control_channel == "/cmd"
+
+
 def test_dot_marks_the_control_channel():
     dot = build_cmg(STACK).to_dot()
     assert '"channel:/cmd" [label="/cmd", shape=box, style=bold];' in dot
@@ -125,6 +134,7 @@ def test_dot_marks_the_control_channel():
         ('{"modules": []}', "'modules' must be an object"),
         ('{"modules": {"a": {"writes": "/x"}}}', "modules.a.writes must be a list"),
         ('{"modules": {}, "extra": 1}', "unknown key 'extra'"),
+        ('{"modules": {}, "control_chanel": "/cmd", "notes": []}', "unknown key 'control_chanel'"),
     ],
 )
 def test_bad_cmg_files_say_what_is_wrong(tmp_path, text, needle):
