@@ -297,8 +297,13 @@ class ChannelModuleGraph:
 
 
 def build_cmg(channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None) -> ChannelModuleGraph:
-    """Build the CMG of a recording; refuses a recording that has no topology at all."""
-    topo = resolve_topology(channels, cmg)
+    """Build the CMG of a recording; refuses a recording that has no topology at all.
+
+    Only recorded channels enter the graph: a channel only the CMG file names is left out
+    (with its edges, so a module that touches nothing else is left out too); callers report
+    those with :meth:`CmgSpec.missing_channels`.
+    """
+    topo = {t: c for t, c in resolve_topology(channels, cmg).items() if c.in_recording}
     graph = ChannelModuleGraph.from_topology(topo)
     if not graph.has_edges():
         raise TopologyError(
@@ -311,15 +316,22 @@ def build_cmg(channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None) -> Ch
 
 
 def control_channel(
-    graph: ChannelModuleGraph, override: str | None = None, cmg: CmgSpec | None = None
+    graph: ChannelModuleGraph,
+    override: str | None = None,
+    cmg: CmgSpec | None = None,
+    where: str = "the recording",
 ) -> str:
     """The channel Algorithm 1 starts from: ``override``, else the CMG file's, else the one
-    channel marked ``rocas.role = control``."""
-    for chosen, origin in ((override, "--control-channel"), (cmg and cmg.control_channel, "cmg")):
+    channel marked ``rocas.role = control``. A chosen channel that is not in the graph is
+    refused; ``where`` names the recording(s) in that message."""
+    for chosen, origin in (
+        (override, "--control-channel"),
+        (cmg and cmg.control_channel, cmg and cmg.path),
+    ):
         if chosen:
             if chosen not in graph.topology:
                 raise TopologyError(
-                    f"control channel {chosen!r} (from {origin}) is not in the recording",
+                    f"control channel {chosen!r} (from {origin}) is not in {where}",
                     f"choose one of: {', '.join(graph.channels)}",
                 )
             return chosen

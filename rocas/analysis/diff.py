@@ -205,8 +205,15 @@ def diff(
     channel_infos = list(rec_a.channels.values())
     known = {c.topic for c in channel_infos}
     channel_infos += [c for c in rec_b.channels.values() if c.topic not in known]
+    both = f"{accident} or {reference}"
+    cmg_warnings = []
+    if spec is not None:
+        for topic in spec.missing_channels(c.topic for c in channel_infos):
+            what = "control channel" if topic == spec.control_channel else "channel"
+            cmg_warnings.append(f"{spec.path} names {what} {topic}, which is not in {both}; "
+                                "ignored")
     graph = build_cmg(channel_infos, spec)
-    ctrl = control_channel(graph, control_channel_topic, spec)
+    ctrl = control_channel(graph, control_channel_topic, spec, where=both)
 
     rows: list[ChannelDiff] = []
     t_star: dict[str, float | None] = {}
@@ -230,6 +237,7 @@ def diff(
         )
     pin = find_initial_module(graph, t_star, ctrl, delta_s)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
+    warnings += tuple(cmg_warnings)
     warnings += tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
     )

@@ -61,3 +61,41 @@ def test_same_inputs_same_result(tmp_path):
     a = diff(pair.accident, pair.reference).to_json()
     b = diff(pair.accident, pair.reference).to_json()
     assert a == b
+
+
+def test_cmg_channels_in_neither_recording_are_reported_and_left_out(tmp_path):
+    import json
+
+    pair = make_pair(tmp_path, deviating="tracker")
+    cmg = tmp_path / "cmg.json"
+    cmg.write_text(json.dumps({"modules": {
+        "ghost": {"reads": ["/ghost/in"], "writes": ["/ghost/out"]},
+        "tracker": {"writes": ["/fusion/tracks"]},
+    }}))
+    r = diff(pair.accident, pair.reference, cmg=cmg)
+    assert r.deviating_module == "tracker"
+    assert "ghost" not in r.cmg.modules
+    assert not {"/ghost/in", "/ghost/out"} & set(r.cmg.channels)
+    doc = r.to_json()
+    assert "ghost" not in [m["name"] for m in doc["modules"]]
+    assert not [e for e in doc["removed_edges"] if "ghost" in e["from"] + e["to"]]
+    for topic in ("/ghost/in", "/ghost/out"):
+        assert (f"{cmg} names channel {topic}, which is not in {pair.accident} or "
+                f"{pair.reference}; ignored") in r.warnings
+
+
+@pytest.mark.parametrize("via", ["cmg", "override"])
+def test_a_control_channel_in_neither_recording_is_refused(tmp_path, via):
+    import json
+
+    pair = make_pair(tmp_path)
+    cmg = tmp_path / "cmg.json"
+    cmg.write_text(json.dumps({"modules": {"ctl": {"writes": ["/ghost/cmd"]}},
+                               "control_channel": "/ghost/cmd"}))
+    kw = {"cmg": cmg} if via == "cmg" else {"control_channel_topic": "/ghost/cmd"}
+    with pytest.raises(TopologyError) as exc:
+        diff(pair.accident, pair.reference, **kw)
+    origin = str(cmg) if via == "cmg" else "--control-channel"
+    assert (f"control channel '/ghost/cmd' (from {origin}) is not in {pair.accident} or "
+            f"{pair.reference}") in str(exc.value)
+    assert CONTROL in exc.value.hint

@@ -140,6 +140,21 @@ def test_no_control_channel_lists_candidates(rocas, tmp_path):
     assert "/cmd" in line and "/planning" in line
 
 
+def test_cmg_naming_absent_channels_warns_and_an_absent_control_channel_is_refused(
+    rocas, pair, tmp_path
+):
+    cmg = tmp_path / "ghost.json"
+    cmg.write_text(json.dumps({"modules": {"ghost": {"writes": ["/ghost/out"]}}}))
+    res = rocas("diff", pair.accident, pair.reference, "--cmg", cmg, "--json")
+    assert res.code == 0, res.stderr
+    assert (f"rocas: warning: {cmg} names channel /ghost/out, which is not in "
+            f"{pair.accident} or {pair.reference}; ignored") in res.stderr
+    assert "ghost" not in [m["name"] for m in json.loads(res.stdout)["modules"]]
+    res = rocas("diff", pair.accident, pair.reference, "--control-channel", "/ghost/cmd")
+    assert res.code == 3
+    _one_error_line(res, "'/ghost/cmd' (from --control-channel) is not in", str(pair.reference))
+
+
 def test_bad_options_are_usage_errors(rocas, pair):
     res = rocas("diff", pair.accident, pair.reference, "--bin", "0")
     assert res.code == 2 and "rocas: error:" in res.stderr and "Traceback" not in res.stderr
