@@ -195,12 +195,23 @@ def diff(
         rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
         adjacent_pairing=not strict_bins,
     )
-    if sum(res.messages_read) == 0:
-        damage = rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference))
+    empty = [
+        (role, path, rec)
+        for role, path, rec, n in (("accident", accident, rec_a, res.messages_read[0]),
+                                   ("reference", reference, rec_b, res.messages_read[1]))
+        if n == 0
+    ]
+    if empty:
+        # one recording without a message would make every channel "only in" the other,
+        # each with MDR 1, and the verdict would be about the file, not the accident
+        damage = [w for _, path, rec in empty for w in rec.report.warnings(str(path))]
+        what = (
+            "neither recording holds a readable message" if len(empty) == 2
+            else f"the {empty[0][0]} recording {empty[0][1]} holds no readable message"
+        )
         raise RecordingError(
-            "neither recording holds a readable message"
-            + (f": {damage[0]}" if damage else ""),
-            "check the files with 'mcap info'",
+            what + (f": {damage[0]}" if damage else ""),
+            f"check the {'files' if len(empty) == 2 else 'file'} with 'mcap info'",
         )
     channel_infos = list(rec_a.channels.values())
     known = {c.topic for c in channel_infos}

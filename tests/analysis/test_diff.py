@@ -4,7 +4,7 @@ import pytest
 from foreign_stack import CONTROL, make_pair
 
 from rocas.analysis import diff
-from rocas.errors import TopologyError
+from rocas.errors import RecordingError, TopologyError
 
 
 @pytest.mark.parametrize("deviating", ["tracker", "forecaster", "behaviour"])
@@ -99,3 +99,16 @@ def test_a_control_channel_in_neither_recording_is_refused(tmp_path, via):
     assert (f"control channel '/ghost/cmd' (from {origin}) is not in {pair.accident} or "
             f"{pair.reference}") in str(exc.value)
     assert CONTROL in exc.value.hint
+
+
+@pytest.mark.parametrize("side", ["accident", "reference"])
+def test_one_recording_without_a_readable_message_is_refused(tmp_path, side):
+    pair = make_pair(tmp_path)
+    cut = tmp_path / "cut.mcap"
+    whole = pair.accident if side == "accident" else pair.reference
+    cut.write_bytes(whole.read_bytes()[:9000])  # the header and a cut-off first chunk
+    args = (cut, pair.reference) if side == "accident" else (pair.accident, cut)
+    with pytest.raises(RecordingError) as exc:
+        diff(*args)
+    assert str(exc.value).startswith(f"the {side} recording {cut} holds no readable message: ")
+    assert "truncated" in str(exc.value) and exc.value.hint == "check the file with 'mcap info'"

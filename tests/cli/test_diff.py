@@ -81,6 +81,14 @@ def test_truncated_accident_still_diffs_with_a_warning(rocas, pair, tmp_path):
     assert json.loads(res.stdout)["deviating_module"] == "forecaster"
 
 
+def test_an_accident_with_no_readable_message_is_refused(rocas, pair, tmp_path):
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(pair.accident.read_bytes()[:9000])
+    res = rocas("diff", cut, pair.reference)
+    assert res.code == 3 and res.stdout == ""
+    _one_error_line(res, f"the accident recording {cut} holds no readable message")
+
+
 def test_corrupted_chunk_is_skipped_with_a_warning(rocas, pair, tmp_path):
     with open(pair.accident, "rb") as f:
         offsets = sorted(c.chunk_start_offset for c in make_reader(f).get_summary().chunk_indexes)
