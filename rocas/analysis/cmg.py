@@ -296,21 +296,34 @@ class ChannelModuleGraph:
         return "\n".join(lines) + "\n"
 
 
-def build_cmg(channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None) -> ChannelModuleGraph:
+NO_TOPOLOGY_HINT = (
+    "pass --cmg FILE with the module graph, or add the metadata with "
+    "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'"
+)
+
+
+def declares_topology(channels: Iterable[ChannelInfo]) -> bool:
+    """Whether any of ``channels`` names a writer or reader (metadata or ``callerid``)."""
+    return any(t.writers or t.readers for t in resolve_topology(channels).values())
+
+
+def build_cmg(
+    channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None, *, where: str = "the recording"
+) -> ChannelModuleGraph:
     """Build the CMG of a recording; refuses a recording that has no topology at all.
 
     Only recorded channels enter the graph: a channel only the CMG file names is left out
     (with its edges, so a module that touches nothing else is left out too); callers report
-    those with :meth:`CmgSpec.missing_channels`.
+    those with :meth:`CmgSpec.missing_channels`. ``where`` names the recording(s) in the
+    refusal.
     """
     topo = {t: c for t, c in resolve_topology(channels, cmg).items() if c.in_recording}
     graph = ChannelModuleGraph.from_topology(topo)
     if not graph.has_edges():
         raise TopologyError(
-            "the recording declares no channel topology (no channel has rocas.writers, "
+            f"no channel topology in {where} (no channel has rocas.writers, "
             "rocas.readers or callerid metadata)",
-            "pass --cmg FILE with the module graph, or add the metadata with "
-            "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'",
+            NO_TOPOLOGY_HINT,
         )
     return graph
 

@@ -41,6 +41,43 @@ def test_without_topology_the_error_names_both_remedies(tmp_path):
     with pytest.raises(TopologyError) as exc:
         diff(pair.accident, pair.reference)
     assert "--cmg" in str(exc.value) and "rocas annotate" in str(exc.value)
+    assert f"no channel topology in {pair.accident} or {pair.reference}" in str(exc.value)
+
+
+def test_the_reference_topology_stands_in_when_the_accident_has_none(tmp_path):
+    from foreign_stack import write_run
+
+    pair = make_pair(tmp_path, topology=False, deviating="tracker")
+    reference = tmp_path / "reference_with_topology.mcap"
+    write_run(reference, accident=False, deviating="tracker", start_sec=1_700_086_400)
+    r = diff(pair.accident, reference)
+    assert r.deviating_module == "tracker" and r.control_channel == CONTROL
+    assert (f"{pair.accident} declares no channel topology; using the one {reference} "
+            "declares (the two recordings have the same channels)") in r.warnings
+
+
+def _tiny(path, topics, topology):
+    from rocas.msgs import control_pb2
+    from rocas.recording import RecordingWriter
+
+    with RecordingWriter(path) as w:
+        for i, topic in enumerate(topics):
+            kw = {"writers": [f"m{i}"], "readers": [f"m{i + 1}"]} if topology else {}
+            w.add_channel(topic, control_pb2.ControlCommand, **kw)
+            w.write(topic, control_pb2.ControlCommand(), log_time_ns=i)
+    return path
+
+
+def test_a_reference_topology_over_other_channels_is_not_borrowed(tmp_path):
+    acc = _tiny(tmp_path / "acc.mcap", ["/a", "/b"], topology=False)
+    ref = _tiny(tmp_path / "ref.mcap", ["/a", "/b", "/c"], topology=True)
+    with pytest.raises(TopologyError) as exc:
+        diff(acc, ref)
+    assert str(exc.value).startswith(
+        f"{acc} declares no channel topology, and the one {ref} declares does not apply to it "
+        "because their channels differ (only in the reference: /c)"
+    )
+    assert f"rocas cmg {ref} --format json" in exc.value.hint
 
 
 def test_cmg_file_supplies_the_topology(tmp_path):
