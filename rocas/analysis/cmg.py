@@ -107,6 +107,18 @@ class CmgSpec:
             for topic in sorted(self.channels())
         }
 
+    def restricted_to(self, topics: Iterable[str]) -> CmgSpec:
+        """The same file with every channel outside ``topics`` dropped from the modules'
+        reads and writes (a module left with none drops out of the graph built from it).
+        The control channel is kept as named, so a check against the recording still sees it.
+        """
+        keep = set(topics)
+
+        def only(side: Mapping[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]]:
+            return {m: tuple(c for c in chans if c in keep) for m, chans in side.items()}
+
+        return CmgSpec(only(self.writes), only(self.reads), self.control_channel, self.path)
+
     def missing_channels(self, topics: Iterable[str]) -> list[str]:
         """Channels the file names (control channel included) that are not in ``topics``."""
         present = set(topics)
@@ -312,12 +324,12 @@ def build_cmg(
 ) -> ChannelModuleGraph:
     """Build the CMG of a recording; refuses a recording that has no topology at all.
 
-    Only recorded channels enter the graph: a channel only the CMG file names is left out
-    (with its edges, so a module that touches nothing else is left out too); callers report
-    those with :meth:`CmgSpec.missing_channels`. ``where`` names the recording(s) in the
-    refusal.
+    Channels only the CMG file names are part of the graph (so a graph can come from a
+    file alone, with ``channels`` empty); to analyse recordings, drop them first with
+    :meth:`CmgSpec.restricted_to` and report them with :meth:`CmgSpec.missing_channels`.
+    ``where`` names the recording(s) in the refusal.
     """
-    topo = {t: c for t, c in resolve_topology(channels, cmg).items() if c.in_recording}
+    topo = resolve_topology(channels, cmg)
     graph = ChannelModuleGraph.from_topology(topo)
     if not graph.has_edges():
         raise TopologyError(

@@ -261,10 +261,12 @@ def diff(
     both = f"{accident} or {reference}"
     cmg_warnings = []
     if spec is not None:
-        for topic in spec.missing_channels(c.topic for c in channel_infos):
+        recorded = {c.topic for c in channel_infos}
+        for topic in spec.missing_channels(recorded):
             what = "control channel" if topic == spec.control_channel else "channel"
             cmg_warnings.append(f"{spec.path} names {what} {topic}, which is not in {both}; "
                                 "ignored")
+        spec = spec.restricted_to(recorded)
     graph = build_cmg(channel_infos, spec, where=both)
     ctrl = control_channel(graph, control_channel_topic, spec, where=both)
 
