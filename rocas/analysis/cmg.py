@@ -296,16 +296,31 @@ class ChannelModuleGraph:
         }
 
     def to_dot(self) -> str:
-        """Graphviz DOT text: modules as ellipses, channels as boxes."""
+        """Graphviz DOT text: modules as ellipses, channels as boxes.
+
+        Names are written as DOT quoted strings with backslash, double quote and line breaks
+        escaped, so any topic or module name gives valid DOT and is shown as it is.
+        """
         lines = ["digraph cmg {", "  rankdir=LR;"]
         for kind, name in sorted(self.graph.nodes):
             shape = "box" if kind == CHANNEL else "ellipse"
             extra = ", style=bold" if kind == CHANNEL and self.topology[name].is_control else ""
-            lines.append(f'  "{kind}:{name}" [label="{name}", shape={shape}{extra}];')
+            lines.append(
+                f"  {_dot_quote(f'{kind}:{name}')} [label={_dot_quote(name)}, "
+                f"shape={shape}{extra}];"
+            )
         for (k1, n1), (k2, n2) in sorted(self.graph.edges):
-            lines.append(f'  "{k1}:{n1}" -> "{k2}:{n2}";')
+            lines.append(f"  {_dot_quote(f'{k1}:{n1}')} -> {_dot_quote(f'{k2}:{n2}')};")
         lines.append("}")
         return "\n".join(lines) + "\n"
+
+
+def _dot_quote(text: str) -> str:
+    r"""``text`` as a DOT quoted string: ``\\`` for a backslash, ``\"`` for a double quote,
+    ``\n`` / ``\r`` for line breaks (one statement stays on one line)."""
+    for raw, escaped in (("\\", "\\\\"), ('"', '\\"'), ("\n", "\\n"), ("\r", "\\r")):
+        text = text.replace(raw, escaped)
+    return f'"{text}"'
 
 
 NO_TOPOLOGY_HINT = (

@@ -132,6 +132,25 @@ def test_dot_marks_the_control_channel():
     assert '"module:planning" -> "channel:/plan";' in dot
 
 
+def test_dot_escapes_quotes_backslashes_and_line_breaks_in_names():
+    import re
+
+    odd_topic, odd_module = '/cam "front"\\raw', 'drv"x\\'
+    graph = build_cmg([chan(1, odd_topic, rocas_writers=odd_module, rocas_readers="a\nb",
+                            rocas_role="control")])
+    dot = graph.to_dot()
+    quoted = re.compile(r'"((?:[^"\\\n]|\\.)*)"')  # a DOT quoted string, escapes allowed
+    names = set()
+    for line in dot.splitlines()[2:-1]:
+        # with the quoted strings taken out, only DOT syntax is left: no stray quote
+        rest = quoted.sub("S", line)
+        assert re.fullmatch(r"  S( \[label=S, shape=(box|ellipse)(, style=bold)?\]| -> S);",
+                            rest), line
+        names |= {re.sub(r"\\(.)", lambda m: {"n": "\n"}.get(m[1], m[1]), q)
+                  for q in quoted.findall(line)}
+    assert {f"channel:{odd_topic}", f"module:{odd_module}", "module:a\nb", odd_topic} <= names
+
+
 @pytest.mark.parametrize(
     ("text", "needle"),
     [
