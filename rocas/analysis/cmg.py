@@ -18,8 +18,10 @@ The CMG JSON format::
     {"modules": {"planning": {"reads": ["/prediction"], "writes": ["/planning"]}},
      "control_channel": "/control"}            # optional
 
-``rocas cmg REC --format json`` prints this format plus a ``"channels"`` list (per-channel
-sources); that list is informational and ignored when the file is read back as ``--cmg``.
+``rocas cmg REC --format json`` prints this format plus the informational keys
+``"channels"`` (per-channel sources), ``"recording"``, ``"control_source"``, ``"notes"`` and
+``"hints"``; they are accepted and ignored when the file is read back as ``--cmg``, so the
+output feeds straight back in. Any other key is refused (it is most likely a typo).
 """
 
 from __future__ import annotations
@@ -105,6 +107,18 @@ class CmgSpec:
             for topic in sorted(self.channels())
         }
 
+    def restricted_to(self, topics: Iterable[str]) -> CmgSpec:
+        """The same file with every channel outside ``topics`` dropped from the modules'
+        reads and writes (a module left with none drops out of the graph built from it).
+        The control channel is kept as named, so a check against the recording still sees it.
+        """
+        keep = set(topics)
+
+        def only(side: Mapping[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]]:
+            return {m: tuple(c for c in chans if c in keep) for m, chans in side.items()}
+
+        return CmgSpec(only(self.writes), only(self.reads), self.control_channel, self.path)
+
     def missing_channels(self, topics: Iterable[str]) -> list[str]:
         """Channels the file names (control channel included) that are not in ``topics``."""
         present = set(topics)
@@ -131,12 +145,16 @@ def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
     return parse_cmg(data, str(p))
 
 
+# keys ``rocas cmg --format json`` adds to the --cmg format; read back, they are ignored
+INFORMATIVE_KEYS = frozenset({"channels", "recording", "control_source", "notes", "hints"})
+
+
 def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:
-    """Validate a decoded CMG JSON document."""
+    """Validate a decoded CMG JSON document (the keys in ``INFORMATIVE_KEYS`` are ignored)."""
     hint = 'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}'
     if not isinstance(data, dict) or not isinstance(data.get("modules"), dict):
         raise InputError(f"{origin}: key 'modules' must be an object of modules", hint)
-    unknown = set(data) - {"modules", "control_channel", "channels"}
+    unknown = set(data) - {"modules", "control_channel"} - INFORMATIVE_KEYS
     if unknown:
         raise InputError(f"{origin}: unknown key {sorted(unknown)[0]!r}", hint)
     writes: dict[str, tuple[str, ...]] = {}
@@ -278,42 +296,82 @@ class ChannelModuleGraph:
         }
 
     def to_dot(self) -> str:
-        """Graphviz DOT text: modules as ellipses, channels as boxes."""
+        """Graphviz DOT text: modules as ellipses, channels as boxes.
+
+        Names are written as DOT quoted strings with backslash, double quote and line breaks
+        escaped, so any topic or module name gives valid DOT and is shown as it is.
+        """
         lines = ["digraph cmg {", "  rankdir=LR;"]
         for kind, name in sorted(self.graph.nodes):
             shape = "box" if kind == CHANNEL else "ellipse"
             extra = ", style=bold" if kind == CHANNEL and self.topology[name].is_control else ""
-            lines.append(f'  "{kind}:{name}" [label="{name}", shape={shape}{extra}];')
+            lines.append(
+                f"  {_dot_quote(f'{kind}:{name}')} [label={_dot_quote(name)}, "
+                f"shape={shape}{extra}];"
+            )
         for (k1, n1), (k2, n2) in sorted(self.graph.edges):
-            lines.append(f'  "{k1}:{n1}" -> "{k2}:{n2}";')
+            lines.append(f"  {_dot_quote(f'{k1}:{n1}')} -> {_dot_quote(f'{k2}:{n2}')};")
         lines.append("}")
         return "\n".join(lines) + "\n"
 
 
-def build_cmg(channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None) -> ChannelModuleGraph:
-    """Build the CMG of a recording; refuses a recording that has no topology at all."""
+def _dot_quote(text: str) -> str:
+    r"""``text`` as a DOT quoted string: ``\\`` for a backslash, ``\"`` for a double quote,
+    ``\n`` / ``\r`` for line breaks (one statement stays on one line)."""
+    for raw, escaped in (("\\", "\\\\"), ('"', '\\"'), ("\n", "\\n"), ("\r", "\\r")):
+        text = text.replace(raw, escaped)
+    return f'"{text}"'
+
+
+NO_TOPOLOGY_HINT = (
+    "pass --cmg FILE with the module graph, or add the metadata with "
+    "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'"
+)
+
+
+def declares_topology(channels: Iterable[ChannelInfo]) -> bool:
+    """Whether any of ``channels`` names a writer or reader (metadata or ``callerid``)."""
+    return any(t.writers or t.readers for t in resolve_topology(channels).values())
+
+
+def build_cmg(
+    channels: Iterable[ChannelInfo], cmg: CmgSpec | None = None, *, where: str = "the recording"
+) -> ChannelModuleGraph:
+    """Build the CMG of a recording; refuses a recording that has no topology at all.
+
+    Channels only the CMG file names are part of the graph (so a graph can come from a
+    file alone, with ``channels`` empty); to analyse recordings, drop them first with
+    :meth:`CmgSpec.restricted_to` and report them with :meth:`CmgSpec.missing_channels`.
+    ``where`` names the recording(s) in the refusal.
+    """
     topo = resolve_topology(channels, cmg)
     graph = ChannelModuleGraph.from_topology(topo)
     if not graph.has_edges():
         raise TopologyError(
-            "the recording declares no channel topology (no channel has rocas.writers, "
+            f"no channel topology in {where} (no channel has rocas.writers, "
             "rocas.readers or callerid metadata)",
-            "pass --cmg FILE with the module graph, or add the metadata with "
-            "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'",
+            NO_TOPOLOGY_HINT,
         )
     return graph
 
 
 def control_channel(
-    graph: ChannelModuleGraph, override: str | None = None, cmg: CmgSpec | None = None
+    graph: ChannelModuleGraph,
+    override: str | None = None,
+    cmg: CmgSpec | None = None,
+    where: str = "the recording",
 ) -> str:
     """The channel Algorithm 1 starts from: ``override``, else the CMG file's, else the one
-    channel marked ``rocas.role = control``."""
-    for chosen, origin in ((override, "--control-channel"), (cmg and cmg.control_channel, "cmg")):
+    channel marked ``rocas.role = control``. A chosen channel that is not in the graph is
+    refused; ``where`` names the recording(s) in that message."""
+    for chosen, origin in (
+        (override, "--control-channel"),
+        (cmg and cmg.control_channel, cmg and cmg.path),
+    ):
         if chosen:
             if chosen not in graph.topology:
                 raise TopologyError(
-                    f"control channel {chosen!r} (from {origin}) is not in the recording",
+                    f"control channel {chosen!r} (from {origin}) is not in {where}",
                     f"choose one of: {', '.join(graph.channels)}",
                 )
             return chosen

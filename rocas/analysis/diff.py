@@ -15,12 +15,13 @@ from rocas.analysis.cmg import (
     CmgSpec,
     build_cmg,
     control_channel,
+    declares_topology,
     load_cmg,
 )
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module
 from rocas.analysis.series import ChannelSeries, compute_series
-from rocas.errors import RecordingError, UsageError
+from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
 
@@ -150,6 +151,44 @@ def _schema_name(pair: tuple[ChannelInfo | None, ChannelInfo | None]) -> str:
     return info.schema_name if info else ""
 
 
+def _channels_for_topology(
+    accident: str, acc: list[ChannelInfo], reference: str, ref: list[ChannelInfo],
+    *, has_cmg: bool,
+) -> tuple[list[ChannelInfo], tuple[str, ...]]:
+    """The channel declarations the CMG is built from, and a note when the reference's
+    topology stands in for the accident's.
+
+    The accident's declarations come first (a topic only the reference has takes the
+    reference's). The topology is a property of the stack, not of one run, so when the
+    accident declares none and the reference does, the reference's is used if the two
+    recordings have the same channels; with different channels it would be a guess, and
+    (without a --cmg file) the accident is refused with an error that says so.
+    """
+    topics_a = {c.topic for c in acc}
+    topics_b = {c.topic for c in ref}
+    if declares_topology(acc) or not declares_topology(ref):
+        return acc + [c for c in ref if c.topic not in topics_a], ()
+    if topics_a == topics_b:
+        return ref, (
+            f"{accident} declares no channel topology; using the one {reference} declares "
+            "(the two recordings have the same channels)",
+        )
+    if has_cmg:  # the file supplies what it names; the rest as usual
+        return acc + [c for c in ref if c.topic not in topics_a], ()
+    only = [
+        f"only in the {role}: {', '.join(sorted(topics))}"
+        for role, topics in (("accident", topics_a - topics_b), ("reference", topics_b - topics_a))
+        if topics
+    ]
+    raise TopologyError(
+        f"{accident} declares no channel topology, and the one {reference} declares does not "
+        f"apply to it because their channels differ ({'; '.join(only)})",
+        f"pass --cmg FILE with the module graph ('rocas cmg {reference} --format json' prints "
+        "the reference's in that format, to complete), or add the metadata with "
+        "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'",
+    )
+
+
 def diff(
     accident: str | os.PathLike[str],
     reference: str | os.PathLike[str],
@@ -166,7 +205,8 @@ def diff(
     """Diff two recordings channel by channel and find the initial deviating module.
 
     Args:
-        accident: the accident recording (its channel metadata gives the topology).
+        accident: the accident recording (its channel metadata gives the topology; when it
+            declares none, the reference's is used if both have the same channels).
         reference: the accident-free reference recording.
         cmg: a CMG JSON path or parsed spec that supplies or overrides the topology.
         control_channel_topic: the channel Algorithm 1 starts from (overrides metadata).
@@ -197,18 +237,40 @@ def diff(
         rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
         reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins,
     )
-    if sum(res.messages_read) == 0:
-        damage = rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference))
-        raise RecordingError(
-            "neither recording holds a readable message"
-            + (f": {damage[0]}" if damage else ""),
-            "check the files with 'mcap info'",
+    empty = [
+        (role, path, rec)
+        for role, path, rec, n in (("accident", accident, rec_a, res.messages_read[0]),
+                                   ("reference", reference, rec_b, res.messages_read[1]))
+        if n == 0
+    ]
+    if empty:
+        # one recording without a message would make every channel "only in" the other,
+        # each with MDR 1, and the verdict would be about the file, not the accident
+        damage = [w for _, path, rec in empty for w in rec.report.warnings(str(path))]
+        what = (
+            "neither recording holds a readable message" if len(empty) == 2
+            else f"the {empty[0][0]} recording {empty[0][1]} holds no readable message"
         )
-    channel_infos = list(rec_a.channels.values())
-    known = {c.topic for c in channel_infos}
-    channel_infos += [c for c in rec_b.channels.values() if c.topic not in known]
-    graph = build_cmg(channel_infos, spec)
-    ctrl = control_channel(graph, control_channel_topic, spec)
+        raise RecordingError(
+            what + (f": {damage[0]}" if damage else ""),
+            f"check the {'files' if len(empty) == 2 else 'file'} with 'mcap info'",
+        )
+    channel_infos, topology_note = _channels_for_topology(
+        str(accident), list(rec_a.channels.values()),
+        str(reference), list(rec_b.channels.values()),
+        has_cmg=spec is not None,
+    )
+    both = f"{accident} or {reference}"
+    cmg_warnings = []
+    if spec is not None:
+        recorded = {c.topic for c in channel_infos}
+        for topic in spec.missing_channels(recorded):
+            what = "control channel" if topic == spec.control_channel else "channel"
+            cmg_warnings.append(f"{spec.path} names {what} {topic}, which is not in {both}; "
+                                "ignored")
+        spec = spec.restricted_to(recorded)
+    graph = build_cmg(channel_infos, spec, where=both)
+    ctrl = control_channel(graph, control_channel_topic, spec, where=both)
 
     rows: list[ChannelDiff] = []
     t_star: dict[str, float | None] = {}
@@ -232,6 +294,7 @@ def diff(
         )
     pin = find_initial_module(graph, t_star, ctrl, delta_s)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
+    warnings += tuple(cmg_warnings) + topology_note
     warnings += tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
     )

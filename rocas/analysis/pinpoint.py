@@ -62,6 +62,30 @@ def _fmt(t: float | None) -> str:
     return "none" if t is None else f"{t:g} s"
 
 
+def _why_not(
+    module: str,
+    t_module: float,
+    deviating: str | None,
+    t_star: Mapping[Node, float | None],
+    depth: Mapping[Node, int],
+    control_channel: str,
+) -> str:
+    """Why a reachable module with a change point is not the answer (see the tie rule)."""
+    if deviating is None:
+        return "reachable"
+    t_dev = t_star[(MODULE, deviating)]
+    if t_dev is None or t_module > t_dev:
+        return (f"reachable, but its change point ({_fmt(t_module)}) is later than "
+                f"{deviating}'s ({_fmt(t_dev)})")
+    # same change point (the same bin): the tie goes to the module farther upstream
+    if depth.get((MODULE, module), 0) < depth.get((MODULE, deviating), 0):
+        return (f"reachable, with the same change point as {deviating} ({_fmt(t_module)}), "
+                f"but {deviating} is farther upstream from {control_channel} and deviations "
+                "travel downstream")
+    return (f"reachable, with the same change point as {deviating} ({_fmt(t_module)}) at the "
+            f"same distance from {control_channel}; the tie goes to {deviating} by name")
+
+
 def find_initial_module(
     cmg: ChannelModuleGraph,
     channel_t_star: Mapping[str, float | None],
@@ -125,12 +149,7 @@ def find_initial_module(
         if m == deviating or tm is None:
             continue
         if m in reachable:
-            exclusions[m] = (
-                f"reachable, but its change point ({_fmt(tm)}) is later than "
-                f"{deviating}'s ({_fmt(t_star[(MODULE, deviating)])})"
-                if deviating
-                else "reachable"
-            )
+            exclusions[m] = _why_not(m, tm, deviating, t_star, depth, control_channel)
         else:
             written = set(cmg.channels_written_by(m))
             cut = [

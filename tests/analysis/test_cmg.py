@@ -83,6 +83,11 @@ def test_channels_only_the_cmg_file_names_are_flagged_not_fatal():
     topo = resolve_topology(STACK, spec)
     assert topo["/ghost"].in_recording is False and topo["/obj"].in_recording is True
     assert spec.missing_channels(c.topic for c in STACK) == ["/ghost", "/nowhere"]
+    kept = spec.restricted_to(c.topic for c in STACK)  # what rocas diff builds the graph from
+    graph = build_cmg(STACK, kept)
+    assert "/ghost" not in graph.channels and graph.channels_written_by("m") == ["/obj"]
+    with pytest.raises(TopologyError, match="'/nowhere' .from <cmg>. is not in the recording"):
+        control_channel(graph, None, kept)
 
 
 def test_annotations_give_each_named_channel_its_writers_and_readers():
@@ -112,10 +117,38 @@ def test_json_output_reads_back_as_a_cmg_file(tmp_path):
     assert control_channel(again, None, spec) == "/cmd"
 
 
+def test_the_keys_rocas_cmg_adds_are_ignored_when_read_back():
+    spec = parse_cmg({
+        "modules": {"m": {"writes": ["/cmd"]}}, "control_channel": "/cmd",
+        "channels": [], "recording": "r.mcap", "control_source": "metadata",
+        "notes": ["a note"], "hints": [],
+    })
+    assert spec.writes == {"m": ("/cmd",)} and spec.control_channel == "/cmd"
+
+
 def test_dot_marks_the_control_channel():
     dot = build_cmg(STACK).to_dot()
     assert '"channel:/cmd" [label="/cmd", shape=box, style=bold];' in dot
     assert '"module:planning" -> "channel:/plan";' in dot
+
+
+def test_dot_escapes_quotes_backslashes_and_line_breaks_in_names():
+    import re
+
+    odd_topic, odd_module = '/cam "front"\\raw', 'drv"x\\'
+    graph = build_cmg([chan(1, odd_topic, rocas_writers=odd_module, rocas_readers="a\nb",
+                            rocas_role="control")])
+    dot = graph.to_dot()
+    quoted = re.compile(r'"((?:[^"\\\n]|\\.)*)"')  # a DOT quoted string, escapes allowed
+    names = set()
+    for line in dot.splitlines()[2:-1]:
+        # with the quoted strings taken out, only DOT syntax is left: no stray quote
+        rest = quoted.sub("S", line)
+        assert re.fullmatch(r"  S( \[label=S, shape=(box|ellipse)(, style=bold)?\]| -> S);",
+                            rest), line
+        names |= {re.sub(r"\\(.)", lambda m: {"n": "\n"}.get(m[1], m[1]), q)
+                  for q in quoted.findall(line)}
+    assert {f"channel:{odd_topic}", f"module:{odd_module}", "module:a\nb", odd_topic} <= names
 
 
 @pytest.mark.parametrize(
@@ -125,6 +158,7 @@ def test_dot_marks_the_control_channel():
         ('{"modules": []}', "'modules' must be an object"),
         ('{"modules": {"a": {"writes": "/x"}}}', "modules.a.writes must be a list"),
         ('{"modules": {}, "extra": 1}', "unknown key 'extra'"),
+        ('{"modules": {}, "control_chanel": "/cmd", "notes": []}', "unknown key 'control_chanel'"),
     ],
 )
 def test_bad_cmg_files_say_what_is_wrong(tmp_path, text, needle):

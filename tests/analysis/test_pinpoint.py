@@ -73,3 +73,25 @@ def test_same_bin_ties_go_to_the_module_farthest_upstream():
     r = _run(tied)
     assert r.deviating_module == "prediction"
     assert r.path[-1] == "prediction"
+    assert r.exclusions["planning"] == (
+        "reachable, with the same change point as prediction (7 s), but prediction is farther "
+        "upstream from /apollo/control and deviations travel downstream"
+    )
+    assert "later than" not in r.exclusions["control"]
+
+
+def test_exclusions_say_later_only_when_later_and_name_a_tie_by_name():
+    r = _run(APPENDIX_A)
+    assert r.exclusions["planning"] == (
+        "reachable, but its change point (7 s) is later than prediction's (4.5 s)"
+    )
+    twins = parse_cmg({"modules": {
+        "a": {"writes": ["/x"]}, "b": {"writes": ["/y"]},
+        "ctl": {"reads": ["/x", "/y"], "writes": ["/cmd"]},
+    }})
+    r = find_initial_module(build_cmg([], twins), {"/x": 1.0, "/y": 1.0, "/cmd": 1.0}, "/cmd")
+    assert r.deviating_module == "a"
+    assert r.exclusions["b"] == (
+        "reachable, with the same change point as a (1 s) at the same distance from /cmd; "
+        "the tie goes to a by name"
+    )

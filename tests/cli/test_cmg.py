@@ -137,3 +137,34 @@ def test_bad_input_is_one_error_line(bare, tmp_path, argv, needle):
     assert code == 3 and out == ""
     assert err.startswith("rocas: error: ") and needle in err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_json_output_feeds_back_as_cmg_and_gives_the_same_graph(tmp_path):
+    from foreign_stack import make_pair
+
+    pair = make_pair(tmp_path, deviating="tracker")
+    code, out, err = run("cmg", str(pair.accident), "--format", "json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert {"recording", "control_source", "notes", "hints", "channels"} <= set(doc)
+    cmg = tmp_path / "g.json"
+    cmg.write_text(out)
+    # rocas cmg, rocas diff and rocas annotate all take it back as --cmg
+    code, again, err = run("cmg", str(pair.accident), "--cmg", str(cmg), "--format", "json")
+    assert code == 0 and err == ""
+    back = json.loads(again)
+    assert back["modules"] == doc["modules"]
+    assert back["control_channel"] == doc["control_channel"]
+    def edges(d):
+        return [(c["topic"], sorted(c["writers"]), sorted(c["readers"]), c["control"])
+                for c in d["channels"]]
+
+    assert edges(back) == edges(doc)
+    code, out, err = run("diff", str(pair.accident), str(pair.reference), "--cmg", str(cmg),
+                         "--json")
+    assert code == 0, err
+    assert json.loads(out)["deviating_module"] == "tracker"
+    copy = tmp_path / "annotated.mcap"
+    code, out, err = run("annotate", str(pair.accident), "--cmg", str(cmg), "-o", str(copy))
+    assert code == 0 and err == ""
+    assert json.loads(run("cmg", str(copy), "--format", "json")[1])["modules"] == doc["modules"]

@@ -81,6 +81,14 @@ def test_truncated_accident_still_diffs_with_a_warning(rocas, pair, tmp_path):
     assert json.loads(res.stdout)["deviating_module"] == "forecaster"
 
 
+def test_an_accident_with_no_readable_message_is_refused(rocas, pair, tmp_path):
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(pair.accident.read_bytes()[:9000])
+    res = rocas("diff", cut, pair.reference)
+    assert res.code == 3 and res.stdout == ""
+    _one_error_line(res, f"the accident recording {cut} holds no readable message")
+
+
 def test_corrupted_chunk_is_skipped_with_a_warning(rocas, pair, tmp_path):
     with open(pair.accident, "rb") as f:
         offsets = sorted(c.chunk_start_offset for c in make_reader(f).get_summary().chunk_indexes)
@@ -118,7 +126,13 @@ def test_non_protobuf_channels_are_skipped_with_a_warning(rocas, tmp_path):
     write(tmp_path / "b.mcap", 0)
     res = rocas("diff", tmp_path / "a.mcap", tmp_path / "b.mcap", "--json")
     assert res.code == 0, res.stderr
-    assert "skipped channel /ros_topic" in res.stderr
+    # one warning per channel and recording, as docs/own-stack.md says
+    skipped = [ln for ln in res.stderr.splitlines() if "skipped channel" in ln]
+    assert skipped == [
+        f"rocas: warning: {tmp_path / name}: skipped channel /ros_topic: 100 messages in an "
+        "encoding rocas cannot decode (only protobuf and json are compared)"
+        for name in ("a.mcap", "b.mcap")
+    ]
     assert json.loads(res.stdout)["deviating_module"] == "control"
 
 
@@ -138,6 +152,21 @@ def test_no_control_channel_lists_candidates(rocas, tmp_path):
     line = _one_error_line(rocas("diff", tmp_path / "a.mcap", tmp_path / "b.mcap"),
                            "--control-channel", "candidates")
     assert "/cmd" in line and "/planning" in line
+
+
+def test_cmg_naming_absent_channels_warns_and_an_absent_control_channel_is_refused(
+    rocas, pair, tmp_path
+):
+    cmg = tmp_path / "ghost.json"
+    cmg.write_text(json.dumps({"modules": {"ghost": {"writes": ["/ghost/out"]}}}))
+    res = rocas("diff", pair.accident, pair.reference, "--cmg", cmg, "--json")
+    assert res.code == 0, res.stderr
+    assert (f"rocas: warning: {cmg} names channel /ghost/out, which is not in "
+            f"{pair.accident} or {pair.reference}; ignored") in res.stderr
+    assert "ghost" not in [m["name"] for m in json.loads(res.stdout)["modules"]]
+    res = rocas("diff", pair.accident, pair.reference, "--control-channel", "/ghost/cmd")
+    assert res.code == 3
+    _one_error_line(res, "'/ghost/cmd' (from --control-channel) is not in", str(pair.reference))
 
 
 def test_bad_options_are_usage_errors(rocas, pair):
