@@ -12,6 +12,7 @@ from rocas.cli.exit_codes import ExitStatus, exit_status_for
 from rocas.errors import (
     InputError,
     NotReproducedError,
+    OutputError,
     RecordingError,
     RocasError,
     ScenarioError,
@@ -26,6 +27,7 @@ TABLE = [
     (TopologyError("no channel has topology", "pass --cmg FILE"), 3),
     (ScenarioError("speed must be positive", None), 3),
     (NotReproducedError("the replay did not collide", "widen the search"), 4),
+    (OutputError("cannot write out.rrd: Permission denied", "choose a writable place"), 5),
     (RocasError("something rocas refused", None), 3),
 ]
 
@@ -51,7 +53,7 @@ def _patch_diff(monkeypatch, exc: BaseException) -> None:
 def test_the_documented_exit_codes():
     assert {s.name: int(s) for s in ExitStatus} == {
         "SUCCESS": 0, "INTERNAL": 1, "USAGE": 2, "INPUT": 3, "NOT_REPRODUCED": 4,
-        "INTERRUPTED": 130,
+        "OUTPUT": 5, "INTERRUPTED": 130,
     }
     assert exit_status_for(KeyboardInterrupt()) == 130
     assert exit_status_for(ZeroDivisionError()) == 1
@@ -144,3 +146,21 @@ def test_nothing_usable_left_is_an_input_error(rocas, pair, tmp_path):
     assert line.startswith("rocas: error: neither recording holds a readable message: ")
     assert "truncated" in line and line.endswith("(check the files with 'mcap info')")
     assert len(res.stderr.splitlines()) == 1
+
+
+@pytest.mark.parametrize("where", ["a directory", "under a file"])
+def test_an_output_that_cannot_be_written_is_refused_before_the_work(rocas, monkeypatch, pair,
+                                                                     tmp_path, where):
+    target = tmp_path / "out.rrd"
+    if where == "a directory":
+        target.mkdir()
+    else:
+        (tmp_path / "plain").write_text("x")
+        target = tmp_path / "plain" / "out.rrd"
+    _patch_diff(monkeypatch, AssertionError("the diff ran before the output was checked"))
+    res = rocas("diff", pair.accident, pair.reference, "--rrd", str(target))
+    assert res.code == 5 and res.stdout == ""
+    assert res.stderr.startswith(f"rocas: error: cannot write {target}: ")
+    assert res.stderr.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["out.rrd"] if where == "a directory" else ["plain"])

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from rocas.errors import UsageError
+from rocas.errors import OutputError, UsageError
 from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
 from rocas.pipeline.analyze import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
@@ -92,6 +92,14 @@ def test_an_existing_run_dir_needs_resume(red_truck, serial_run):
     with pytest.raises(UsageError, match="other inputs or settings"):
         analyze(red_truck, out, AnalyzeConfig(seed=2, budget=16, population=8), resume=True,
                 executor=SerialExecutor())
+
+
+def test_a_run_dir_that_cannot_be_made_is_an_output_error(red_truck, tmp_path):
+    (tmp_path / "taken").write_text("keep")
+    for out in (tmp_path / "taken", tmp_path / "taken" / "run"):
+        with pytest.raises(OutputError, match=f"cannot make run directory {out}"):
+            analyze(red_truck, out, CFG, executor=SerialExecutor())
+    assert (tmp_path / "taken").read_text() == "keep"
 
 
 def test_a_run_dir_from_before_a_setting_existed_resumes_with_its_default(red_truck, serial_run,
