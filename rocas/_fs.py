@@ -14,7 +14,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from rocas.errors import OutputError
+from rocas.errors import OutputError, UsageError
 
 _FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
 
@@ -56,6 +56,18 @@ def check_writable(path: str | os.PathLike[str]) -> None:
         OutputError: as :func:`atomic_path`.
     """
     _temporary_beside(Path(path)).unlink()
+
+
+def refuse_overwriting(source: str | os.PathLike[str], output: str | os.PathLike[str]) -> None:
+    """Refuse an output that is the input file itself (by any path or link).
+
+    Raises:
+        UsageError: ``output`` names the same file as ``source``.
+    """
+    src, dst = Path(source), Path(output)
+    if src.exists() and dst.exists() and os.path.samefile(src, dst):
+        raise UsageError(f"the output {dst} is the input recording {src}",
+                         "write the output to another file; the input would be lost")
 
 
 def _temporary_beside(final: Path) -> Path:

@@ -186,7 +186,7 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
         RecordingError: the recording lacks the world attachment or the pose/obstacle channels.
     """
     rec = read_recording(path)
-    notes: list[str] = []
+    notes: list[str] = list(rec.warnings)
     world = dict(rec.world)
     head = dict(world.get("scenario", {}))
     meta = rec.ego_meta

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from rocas._fs import refuse_overwriting
 from rocas.replay.reconstruction import (
     AccidentInfo,
     Reconstruction,
@@ -134,9 +135,14 @@ def replay(source: Reconstruction | str | os.PathLike[str],
         source: a :class:`Reconstruction` or a recording path.
         params: ADS parameter overrides on top of the recorded ones (a what-if).
         output: write the replay's recording here (atomically), or None.
+
+    Raises:
+        UsageError: ``output`` is the recording being replayed.
     """
     from rocas.sim.engine import simulate
 
+    if output is not None and not isinstance(source, Reconstruction):
+        refuse_overwriting(source, output)
     rec = source if isinstance(source, Reconstruction) else reconstruct(source)
     params = dict(params or {})
     start = time.perf_counter()

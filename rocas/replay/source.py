@@ -73,6 +73,7 @@ class RecordedRun:
         ego_lanes: T matched lane ids ("" when unmatched).
         detections: the perception obstacles.
         perception_period_s: median time between perception frames [s].
+        warnings: the reader's warnings (truncation, skipped damage, undecodable messages).
     """
 
     path: str
@@ -84,6 +85,7 @@ class RecordedRun:
     ego_lanes: tuple[str, ...]
     detections: Detections
     perception_period_s: float
+    warnings: tuple[str, ...] = ()
 
 
 def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
@@ -117,10 +119,12 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
                 embedded = (msg.ego_position.x, msg.ego_position.y, msg.ego_heading)
             frames.append((t, list(msg.perception_obstacle), embedded))
     topics = rec.topics()
+    damage = tuple(rec.report.warnings(path))
     missing = [t for t in (TOPIC_POSE, TOPIC_OBSTACLES) if t not in topics]
     if missing:
         raise RecordingError(
-            f"{path}: replay needs channel(s) {', '.join(missing)}, which the recording lacks",
+            f"{path}: replay needs channel(s) {', '.join(missing)}, which the recording lacks"
+            + (f"; {damage[0].removeprefix(path + ': ')}" if damage else ""),
             "replay rebuilds the ego from /localization/pose and every other actor from "
             "/perception/obstacles")
     if not pose_rows:
@@ -155,7 +159,7 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
     return RecordedRun(path=path, world=world, ego_meta=meta.get(EGO_METADATA),
                        run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
                        ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
-                       perception_period_s=period if period > 0 else 0.1)
+                       perception_period_s=period if period > 0 else 0.1, warnings=damage)
 
 
 _REPLAY_TYPES = {TOPIC_POSE: localization_pb2.LocalizationEstimate.DESCRIPTOR.full_name,

@@ -40,3 +40,18 @@ def test_not_reproduced_exits_4_after_the_report(rocas, red_truck_recording, mon
     assert r.code == 4
     assert json.loads(r.stdout)["reproduced"] is False      # the report is still printed
     assert "did not reproduce" in r.stderr
+
+
+def test_the_output_may_not_be_the_input_recording(rocas, red_truck_recording, tmp_path):
+    import shutil
+
+    copy = tmp_path / "a.mcap"
+    shutil.copy(red_truck_recording, copy)
+    before = copy.read_bytes()
+    link = tmp_path / "link.mcap"
+    link.symlink_to(copy)
+    for out in (copy, link, tmp_path / "." / "a.mcap"):
+        r = rocas("replay", copy, "-o", out)
+        assert r.code == 2 and "is the input recording" in r.stderr, r.stderr
+    assert copy.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mcap", "link.mcap"]

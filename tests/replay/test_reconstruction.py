@@ -167,3 +167,17 @@ def test_another_stacks_types_and_a_world_without_map_are_refused_by_name(tmp_pa
     elsewhere = _foreign(tmp_path / "elsewhere.mcap", pose, good_map.replace(b"L1", b"L9"))
     with pytest.raises(RecordingError, match="none of the lanes"):
         reconstruct(elsewhere)
+
+
+def test_a_truncated_recording_says_so(recorded, tmp_path):
+    from pathlib import Path
+
+    shipped = Path(__file__).parents[2] / "recordings" / "a10_skewed_junction_light.mcap"
+    data = shipped.read_bytes()  # several chunks: a cut keeps the first ones
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.85)])
+    assert any("truncated" in n for n in reconstruct(cut).notes)
+    stub = tmp_path / "stub.mcap"
+    stub.write_bytes(data[:4000])
+    with pytest.raises(RecordingError, match="lacks; recording is truncated"):
+        reconstruct(stub)
