@@ -67,11 +67,20 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
-        p.add_argument("--traceback", action="store_true", default=argparse.SUPPRESS,
-                       help="show the full traceback on errors")
         module.add_arguments(p)
+        _add_traceback(p)
         p.set_defaults(_run=module.run)
     return parser
+
+
+def _add_traceback(p: argparse.ArgumentParser) -> None:
+    """Accept --traceback after the command, and after an action of a command that has them."""
+    p.add_argument("--traceback", action="store_true", default=argparse.SUPPRESS,
+                   help="show the full traceback on errors")
+    for action in p._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                _add_traceback(child)
 
 
 def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:

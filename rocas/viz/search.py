@@ -47,6 +47,11 @@ def generations_from_json(items: Sequence[dict[str, Any]]) -> list[GenerationSta
     return out
 
 
+#: the paper's names of each search's objectives: f for the physical mutation (section 5.1),
+#: h for the cyber mutation (section 5.3); other phases get f1, f2, ...
+OBJECTIVE_NAMES: dict[str, tuple[str, ...]] = {"physical": ("f1", "f2", "f3"), "cyber": ("h1", "h2")}
+
+
 def log_search(
     rec: Any,
     phase: str,
@@ -62,7 +67,8 @@ def log_search(
         phase: ``"physical"`` or ``"cyber"`` (any name works).
         generations: per-generation statistics in order.
         best_labels: a description of the best candidate so far, one per generation.
-        objective_names: names of the objectives (default ``f1``, ``f2``, ...).
+        objective_names: names of the objectives (default: :data:`OBJECTIVE_NAMES` of the
+            phase, else ``f1``, ``f2``, ...).
     """
     import rerun as rr
 
@@ -75,7 +81,7 @@ def log_search(
         return [rr.TimeColumn(TIMELINE, sequence=values)]
 
     n_obj = max((g.objectives.shape[1] for g in generations if g.objectives.ndim == 2), default=0)
-    names = list(objective_names or [f"f{j + 1}" for j in range(n_obj)])[:n_obj]
+    names = list(objective_names or OBJECTIVE_NAMES.get(phase, ()))[:n_obj]
     names += [f"f{j + 1}" for j in range(len(names), n_obj)]
     best_so_far = np.full(n_obj, np.inf)
     best_rows: list[np.ndarray] = []

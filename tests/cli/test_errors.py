@@ -164,3 +164,12 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_work(rocas, monk
     assert res.stderr.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
         ["out.rrd"] if where == "a directory" else ["plain"])
+
+
+def test_traceback_is_accepted_after_every_command_and_action():
+    from rocas.cli.main import build_parser
+
+    parser = build_parser()
+    for argv in (["catalog", "list", "--traceback"], ["catalog", "--traceback", "list"],
+                 ["params", "--traceback"], ["--traceback", "catalog", "list"]):
+        assert parser.parse_args(argv).traceback is True, argv

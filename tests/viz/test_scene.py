@@ -151,3 +151,13 @@ def test_search_progress_on_the_generation_timeline(tmp_path):
         ]
     )
     assert back[0].objectives.shape == (8, 3)
+
+
+def test_the_cyber_search_plots_are_named_h1_h2(tmp_path):
+    gens = [GenerationStats(0, 8, 0, 1.0, np.ones((8, 2)), np.zeros(8))]
+    out = tmp_path / "cyber.rrd"
+    with rrd_recording(out) as rec:
+        log_search(rec, "cyber", gens)
+    e, _ = read_rrd(out)
+    assert "/search/cyber/objectives/h1" in e and "/search/cyber/best/h2" in e
+    assert not any(k.startswith("/search/cyber/objectives/f") for k in e)
