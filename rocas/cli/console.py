@@ -22,8 +22,14 @@ class Env:
     stderr: TextIO = field(default_factory=lambda: sys.stderr)
 
     def out(self) -> Console:
-        """A rich console on stdout (plain text, 160 columns, when stdout is not a terminal)."""
-        return Console(file=self.stdout, highlight=False, width=None if _isatty(self.stdout) else 160)
+        """A rich console on stdout.
+
+        When stdout is not a terminal: plain text, tables 160 columns wide, and lines of prose
+        never broken (a pipe or a file has no width to wrap to, and grep needs whole lines).
+        """
+        tty = _isatty(self.stdout)
+        return Console(file=self.stdout, highlight=False, width=None if tty else 160,
+                       soft_wrap=not tty)
 
     def err(self) -> Console:
         """A rich console on stderr (for progress bars)."""

@@ -180,3 +180,4 @@ def test_traceback_flag_shows_the_story(rocas, pair, tmp_path):
     res = rocas("--traceback", "diff", tmp_path / "nope.mcap", pair.reference)
     assert res.code == 3 and "Traceback" in res.stderr
 
+
