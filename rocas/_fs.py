@@ -70,6 +70,13 @@ def refuse_overwriting(source: str | os.PathLike[str], output: str | os.PathLike
                          "write the output to another file; the input would be lost")
 
 
+def is_temporary(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is named like the temporary sibling :func:`atomic_path` writes
+    (``.NAME.XXXXXXXX.part``): debris of a process killed while writing, never a finished file."""
+    name = Path(path).name
+    return name.startswith(".") and name.endswith(".part") and len(name) > len("..part")
+
+
 def _temporary_beside(final: Path) -> Path:
     if final.is_dir():
         raise OutputError(f"cannot write {final}: it is a directory",

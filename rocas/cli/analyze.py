@@ -15,12 +15,15 @@ from rocas.cli.exit_codes import ExitStatus
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
 
 
-def add_search_arguments(p: argparse.ArgumentParser) -> None:
+def add_search_arguments(p: argparse.ArgumentParser,
+                         seeded: str = "the searches and the validation variants") -> None:
     """The options of an analysis that ``rocas bench`` passes on too (defaults as in
-    :class:`rocas.pipeline.analyze.AnalyzeConfig`)."""
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the searches, the validation variants and generated instances (default 0)")
-    p.add_argument("--budget", type=int, default=240, help="simulations per search phase (default 240)")
+    :class:`rocas.pipeline.analyze.AnalyzeConfig`); ``seeded`` says what --seed seeds."""
+    p.add_argument("--seed", type=int, default=0, help=f"seed of {seeded} (default 0)")
+    p.add_argument("--budget", type=int, default=240,
+                   help="simulations per search phase; the cyber phase's screening (up to two per "
+                        "parameter) comes out of it, but at least one generation of new mutants "
+                        "follows (default 240)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--validation", type=int, default=200, metavar="K",
                    help="perturbed variants in the regression test (default 200)")
@@ -39,7 +42,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
     p.add_argument("--scope", choices=("module", "all"), default="module",
                    help="cyber search over the deviating module (default) or every parameter")
-    p.add_argument("--executor", default="local", help="where simulations run (default local)")
+    from rocas.search.executor import executor_names
+
+    p.add_argument("--executor", default="local",
+                   help=f"where simulations run: {', '.join(executor_names())} (default local)")
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -67,17 +73,15 @@ def run(args: argparse.Namespace, env: Env) -> int:
     out = Path(args.out) if args.out else Path("runs") / name
     if args.rrd:
         check_writable(args.rrd)  # before minutes of work, not after
-    progress = _Progress(env, {"physical": cfg.budget, "cyber": cfg.budget,
-                               "validation": validation_simulations(cfg.validation_variants)})
+    progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})
     try:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress)
+        if args.rrd:
+            _write_rrd(args.rrd, out, report)
     except KeyboardInterrupt as exc:
-        exc.kept = (f"finished phases and search checkpoints are kept in {out}; "  # type: ignore[attr-defined]
-                    "continue with --resume")
+        exc.kept = kept_after_interrupt(out, args.rrd)  # type: ignore[attr-defined]
         raise
-    if args.rrd:
-        _write_rrd(args.rrd, out, report)
     if args.json:
         env.stdout.write(json.dumps(report, indent=2) + "\n")
     else:
@@ -85,6 +89,29 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if args.rrd:
             env.out().print(f"Rerun recording: {args.rrd}")
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+
+
+def kept_after_interrupt(out: Path, rrd: str | None) -> str:
+    """What an interrupted ``rocas analyze`` left in ``out``, read from the disk: the
+    interrupt message's part in parentheses."""
+    try:
+        state = json.loads((out / "state.json").read_text(encoding="utf-8"))
+        done = list(state["done"])
+    except (OSError, ValueError, KeyError, TypeError):
+        done = []
+    if (out / "report.json").exists() and done:
+        # the analysis had finished (or had been resumed to its end): only the .rrd is missing
+        return (f"the analysis is complete in {out} (report.json)"
+                + (f"; {rrd} was not written, run again with --resume --rrd {rrd}" if rrd else ""))
+    checkpoints = sorted(p.name for p in out.glob("*.ckpt")) if out.is_dir() else []
+    if not done and not checkpoints:
+        return "no phase had finished, nothing was kept"
+    kept = []
+    if done:
+        kept.append(f"finished phases ({', '.join(done)})")
+    if checkpoints:
+        kept.append(f"search checkpoints ({', '.join(checkpoints)})")
+    return f"{' and '.join(kept)} are kept in {out}; continue with --resume"
 
 
 def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
@@ -100,7 +127,7 @@ def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
 
     if (out / "reference.mcap").exists():
         write_diff_rrd(diff(out / "accident.mcap", out / "reference.mcap",
-                            delta_s=report.get("delta_s", 3.0)), path)
+                            delta_s=(report.get("settings") or {}).get("delta_s", 3.0)), path)
 
 
 class _Progress:
@@ -137,12 +164,17 @@ class _Progress:
             self._p.stop_task(task)
 
     def __call__(self, phase: str, info: dict[str, Any]) -> None:
+        if "planned" in info:  # a search's planned simulations, sent as it starts
+            info = dict(info)
+            self._totals[phase] = info.pop("planned")
         if phase not in self._tasks:
             self._finish_all()
             total = self._totals.get(phase)
             self._tasks[phase] = self._p.add_task(
                 phase, total=total, info="", count=f"0/{total}" if total else "")
         task = self._tasks[phase]
+        if not info:
+            return
         if "generation" in info:
             n = info["evaluations"]
             self._done[phase] = n
@@ -164,7 +196,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rich.panel import Panel
     from rich.table import Table
 
-    from rocas.pipeline.report import change, robust_text
+    from rocas.pipeline.report import change, replay_text, robust_text, settings_text
 
     con = env.out()
     t = Table(show_header=False, box=None, padding=(0, 1))
@@ -172,6 +204,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     t.add_column()
     acc = report["accident"]
     t.add_row("verdict", report["verdict"].replace("_", " "))
+    if report.get("replay"):
+        t.add_row("replay", replay_text(report))
     if acc:
         t.add_row("accident", f"{acc['kind']}" + (f" with {acc['other']}" if acc["other"] else "")
                   + f" at {acc['time_s']:.2f} s")
@@ -199,6 +233,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
                   f"({100 * (ss['reduction'] or 0):.1f} % reduction)")
     t.add_row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report["timings_s"].items()))
     t.add_row("simulations", ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
+    if report.get("settings"):
+        t.add_row("settings", settings_text(report))
     t.add_row("run directory", str(out))
     con.print(t)
     con.print(Panel(report["explanation"], title="why", expand=False))

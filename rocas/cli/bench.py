@@ -18,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", default="runs/bench", help="where run directories go")
     p.add_argument("--recordings", metavar="DIR", default="recordings",
                    help="directory with the catalog recordings (default recordings/)")
-    add_search_arguments(p)
+    add_search_arguments(p, "the searches, the validation variants and generated instances")
     p.add_argument("--compare-scope", type=int, default=3, metavar="N",
                    help="entries also analysed with --scope all (default 3)")
     p.add_argument("--instances", type=int, default=0, metavar="K",

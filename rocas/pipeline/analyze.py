@@ -21,7 +21,9 @@ Run directory::
 
 from __future__ import annotations
 
+import hashlib
 import json
+import math
 import os
 import time
 from collections.abc import Callable, Mapping
@@ -31,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from rocas._fs import check_writable, write_text_atomic
-from rocas.errors import OutputError, UsageError
+from rocas._fs import check_writable, is_temporary, write_text_atomic
+from rocas.errors import InputError, OutputError, ScenarioError, UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.pipeline.evaluate import (
     VariantResult,
@@ -66,10 +68,13 @@ VERDICTS = ("misconfiguration", "no_configuration_fix", "no_reference", "not_rep
 class AnalyzeConfig:
     """Settings of one analysis.
 
+    Every setting is checked on construction (:class:`~rocas.errors.UsageError` with a hint),
+    before a run directory is made or anything is simulated.
+
     Attributes:
-        seed: seed of every search and of the validation variants.
-        budget: simulations per search phase (population x generations).
-        population: individuals per generation.
+        seed: seed of every search and of the validation variants (zero or more).
+        budget: simulations per search phase (the rule: :meth:`search`).
+        population: individuals per generation (at least 2).
         scope: "module" (search the deviating module's parameters) or "all" (the paper's
             brute-force baseline: every parameter).
         executor: registered executor name; workers: its worker count (None: all cores).
@@ -102,25 +107,77 @@ class AnalyzeConfig:
     screening: bool = True
 
     def __post_init__(self) -> None:
-        if self.scope not in ("module", "all"):
-            raise UsageError(f"--scope must be module or all, not {self.scope!r}")
+        # every setting is checked here, before a run directory is made or a simulation runs
+        def whole(value: Any, least: int, option: str, example: int) -> None:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+                raise UsageError(f"{option} must be a whole number of at least {least}, not {value!r}",
+                                 f"e.g. {option} {example}")
+
+        def real(value: Any, option: str, example: float, positive: bool = False) -> None:
+            ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) \
+                and math.isfinite(value) and (value > 0 if positive else value >= 0)
+            if not ok:
+                raise UsageError(f"{option} must be a {'positive' if positive else 'non-negative'} "
+                                 f"finite number, not {value!r}", f"e.g. {option} {example:g}")
+
+        whole(self.seed, 0, "--seed", 0)
+        whole(self.population, 2, "--population", 24)
+        whole(self.budget, 1, "--budget", 240)
         if self.budget < self.population:
-            raise UsageError(f"--budget must be at least the population ({self.population})")
-        if self.validation_variants < 0:
-            raise UsageError("--validation must be zero or positive")
-        if self.shrink_candidates < 1:
-            raise UsageError("shrink_candidates must be at least 1")
+            raise UsageError(f"--budget must be at least the population ({self.population}), "
+                             f"not {self.budget}", "raise --budget or lower --population")
+        if self.scope not in ("module", "all"):
+            raise UsageError(f"--scope must be module or all, not {self.scope!r}",
+                             "module searches the deviating module's parameters, all every one")
+        from rocas.search.executor import executor_names
+
+        if self.executor not in executor_names():
+            raise UsageError(f"unknown executor {self.executor!r}",
+                             f"choose one of: {', '.join(executor_names())}")
+        if self.workers is not None:
+            whole(self.workers, 1, "--workers", 1)
+        whole(self.batch_size, 1, "batch_size", 32)
+        real(self.delta_s, "--delta", 3.0)
+        whole(self.validation_variants, 0, "--validation", 200)
+        real(self.k_suspicion, "k_suspicion", 10.0, positive=True)
+        real(self.h1_limit_m2, "h1_limit_m2", 1.0)
+        whole(self.shrink_candidates, 1, "shrink_candidates", 3)
 
     def search(self, stage: int, n_vars: int = 0) -> SearchConfig:
-        """Stage 1: physical (single-property seeds). Stage 2: cyber (screening first, unless
-        switched off, which costs two simulations per parameter out of the budget)."""
+        """The search of stage 1 (physical: single-property seeds) or 2 (cyber).
+
+        The budget rule (see :func:`planned_simulations`): stage 1 runs budget // population
+        generations. Stage 2 with screening first tries each of its ``n_vars`` parameters
+        alone at both ends of its range (two simulations per parameter, out of the budget),
+        then runs (budget - 2 n_vars) // population generations, but at least 2: the first
+        generation is the best screened mutants, already simulated, so at least one generation
+        of new mutants always runs, even when the screening alone uses up the budget."""
         screen = stage == 2 and self.screening
-        left = self.budget - (2 * n_vars if screen else 0)
-        return SearchConfig(population=self.population,
-                            generations=max(1, left // self.population),
+        generations = (max(2, (self.budget - 2 * n_vars) // self.population) if screen
+                       else self.budget // self.population)
+        return SearchConfig(population=self.population, generations=generations,
                             seed=self.seed * 1000 + stage,
                             single_property_share=1.0 if stage == 1 else 0.5,
                             mutate_prob=0.3, screen=screen)
+
+
+def planned_simulations(search: SearchConfig, screening: int = 0) -> int:
+    """The most simulations a search runs (its progress bar's total): the ``screening``
+    simulations, then population new mutants per generation, except that with screening the
+    first generation is the best screened mutants (new ones only where fewer were screened
+    than the population). Repeated mutants are simulated once, so a search may run fewer."""
+    if not search.screen:
+        return search.population * search.generations
+    return (screening + max(0, search.population - screening)
+            + search.population * (search.generations - 1))
+
+
+def screening_simulations(space: MutationSpace, seed: int) -> int:
+    """How many simulations the screening of ``space`` runs: two per parameter, less an end
+    of a range that is the parameter's value in force (no change, nothing to simulate)."""
+    from rocas.search.ga import screening_genomes
+
+    return len({m for m in (space.decode(g) for g in screening_genomes(space, seed)) if m.values})
 
 
 @dataclass(frozen=True)
@@ -201,35 +258,131 @@ def _jsonable(x: Any) -> Any:
     raise TypeError(type(x).__name__)
 
 
-def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig) -> dict[str, Any]:
-    """Create or reopen a run directory; returns its state."""
+#: settings of AnalyzeConfig that do not change the result (where and how simulations run)
+_NOT_SETTINGS = ("executor", "workers")
+#: ... and those the report lists (batch_size only groups simulations)
+REPORT_SETTINGS = ("seed", "budget", "population", "scope", "screening", "delta_s",
+                   "validation_variants", "h1_limit_m2", "k_suspicion", "shrink_candidates")
+
+
+def _config(cfg: AnalyzeConfig) -> dict[str, Any]:
+    return {k: getattr(cfg, k) for k in cfg.__dataclass_fields__ if k not in _NOT_SETTINGS}
+
+
+def source_identity(source: str | os.PathLike[str] | Scenario) -> tuple[str, str]:
+    """``(label, sha256)`` of an analysis's input: the recording's resolved path and the
+    digest of its bytes, or ``scenario:NAME`` and the digest of the scenario's canonical JSON.
+    A run directory is resumed only with an input of the same digest.
+
+    Raises:
+        InputError: the recording cannot be read.
+    """
+    if isinstance(source, Scenario):
+        from rocas.scenarios.loader import scenario_to_dict
+
+        text = json.dumps(scenario_to_dict(source), sort_keys=True, separators=(",", ":"))
+        return f"scenario:{source.name}", hashlib.sha256(text.encode()).hexdigest()
+    path = Path(source)
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(1 << 20):
+                digest.update(chunk)
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror or exc}", "check the path") from None
+    return str(path.resolve()), digest.hexdigest()
+
+
+def _damaged(out: Path, name: str, reason: str) -> InputError:
+    return InputError(f"run directory {out} is damaged: {name} {reason}",
+                      f"delete {out} to start again, or choose another --out")
+
+
+def _read_state(out: Path) -> dict[str, Any]:
+    try:
+        state = json.loads((out / "state.json").read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise _damaged(out, "state.json", f"cannot be read ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _damaged(out, "state.json", f"is not valid JSON ({exc})") from None
+    if not (isinstance(state, dict)
+            and all(isinstance(state.get(k), dict) for k in ("done", "config", "timings_s", "evaluations"))
+            and set(state["done"]) <= set(PHASES)):
+        raise _damaged(out, "state.json", "is not a rocas run state")
+    return state
+
+
+def _remove_debris(out: Path) -> None:
+    """Remove the temporaries of writes a killed process left (``.NAME.XXXX.part``)."""
+    for p in out.iterdir():
+        if is_temporary(p) and p.is_file():
+            p.unlink(missing_ok=True)
+
+
+def _fmt_setting(v: Any) -> str:
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig,
+                    source_sha256: str | None = None) -> dict[str, Any]:
+    """Create or reopen a run directory; returns its state.
+
+    A run directory is resumed only with the same settings (those that change the result; not
+    the executor or its workers) and the same input: the same ``source_sha256`` (content), or,
+    for a run directory written before inputs were identified by content, the same ``source``
+    label (path). Temporaries of writes a killed run left behind (``.NAME.XXXX.part``) are
+    removed, and are not taken for foreign content.
+
+    Raises:
+        UsageError: ``out`` holds an analysis but ``resume`` is False, or one of another input
+            or other settings, or other files.
+        InputError: ``out/state.json`` is damaged.
+        OutputError: ``out`` cannot be made or written.
+    """
     state_path = out / "state.json"
-    config = {k: getattr(cfg, k) for k in cfg.__dataclass_fields__ if k not in ("executor", "workers")}
+    config = _config(cfg)
     if state_path.exists():
         if not resume:
             raise UsageError(f"run directory {out} already holds an analysis",
                              "continue it with --resume, or choose another --out")
-        state = json.loads(state_path.read_text())
+        state = _read_state(out)
+        if "source_sha256" in state:
+            same_input = state["source_sha256"] == source_sha256
+        else:  # written before inputs were identified by content: by path, as then
+            same_input = state.get("source") == source
+        if not same_input:
+            raise UsageError(f"run directory {out} holds the analysis of another input: it was "
+                             f"started on {state.get('source')}, and {source} has other content",
+                             "choose another --out, or resume with the input it was started with")
         # a setting added after the run was started has its default, which is what that run used
-        default = AnalyzeConfig()
-        defaults = {k: getattr(default, k) for k in config}
-        if state.get("source") != source or {**defaults, **state.get("config", {})} != config:
-            raise UsageError(f"run directory {out} holds an analysis of other inputs or settings",
-                             "choose another --out, or resume with the same input and options")
+        default = _config(AnalyzeConfig())
+        stored = {**default, **{k: v for k, v in state["config"].items() if k in default}}
+        differ = [f"{k} {_fmt_setting(config[k])} vs {_fmt_setting(stored[k])}"
+                  for k in config if config[k] != stored[k]]
+        if differ:
+            raise UsageError(f"run directory {out} holds an analysis with other settings "
+                             f"(given vs stored: {', '.join(differ)})",
+                             "choose another --out, or resume with the options it was started with")
+        _remove_debris(out)
         return state
     if out.exists() and not out.is_dir():
         raise OutputError(f"cannot make run directory {out}: a file of that name exists",
                           "choose another --out")
-    if out.exists() and any(out.iterdir()):
-        raise UsageError(f"{out} exists and is not a rocas run directory", "choose another --out")
+    if out.exists():
+        if any(not is_temporary(p) for p in out.iterdir()):
+            raise UsageError(f"{out} exists and is not a rocas run directory", "choose another --out")
+        _remove_debris(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
         check_writable(out / "state.json")
     except OSError as exc:
         raise OutputError(f"cannot make run directory {out}: {exc.strerror or exc}",
                           "choose a writable place for --out") from exc
-    return {"version": 1, "source": source, "config": config, "done": {}, "timings_s": {},
-            "evaluations": {}}
+    state = {"version": 1, "source": source, "config": config, "done": {}, "timings_s": {},
+             "evaluations": {}}
+    if source_sha256 is not None:
+        state["source_sha256"] = source_sha256
+    return state
 
 
 # -- phase I: replay -------------------------------------------------------------------------
@@ -238,7 +391,12 @@ def _phase_replay(run: _Run, scenario: Scenario | None, recording: Path | None) 
     from rocas.sim.engine import simulate
 
     if run.done("replay"):
-        run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
+        try:
+            run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
+        except OSError as exc:
+            raise _damaged(run.out, "scenario.json", f"cannot be read ({exc.strerror or exc})") from None
+        except (ValueError, ScenarioError) as exc:  # JSONDecodeError and UnicodeDecodeError too
+            raise _damaged(run.out, "scenario.json", f"is not a valid scenario ({exc})") from None
     else:
         t0 = time.perf_counter()
         result: dict[str, Any] = {}
@@ -248,11 +406,19 @@ def _phase_replay(run: _Run, scenario: Scenario | None, recording: Path | None) 
             recon = replay_mod.reconstruct(recording)
             report = replay_mod.replay(recon, output=run.out / "accident.mcap")
             scenario = recon.scenario
-            result = {"reproduced": bool(report.reproduced), "ego_rmse_m": report.ego_rmse_m}
+            # the replay figures of the report: the recorded accident (None: the recording
+            # holds none), the replay's, and how closely the ego followed its recorded pose
+            result = {"source": "recording", "reproduced": bool(report.reproduced),
+                      "recorded_accident": report.original.to_dict() if report.original else None,
+                      "accident": report.accident.to_dict() if report.accident else None,
+                      "ego_rmse_m": report.ego_rmse_m, "compared_until_s": report.compared_until_s}
         else:
             assert scenario is not None
             res = simulate(scenario, output=run.out / "accident.mcap")
-            result = {"reproduced": is_accident(res.outcome), "ego_rmse_m": 0.0}
+            acc = Accident.of(res.outcome)
+            result = {"source": "scenario", "reproduced": is_accident(res.outcome),
+                      "recorded_accident": None, "accident": acc.to_json() if acc else None,
+                      "ego_rmse_m": 0.0}
         run.scenario = scenario
         write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
         write_text_atomic(run.out / "replay.json", json.dumps(result, indent=1))
@@ -271,7 +437,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
 
     if run.done("physical"):
         return run.state["done"]["physical"]
-    run.progress("physical", {})
+    run.progress("physical", {"planned": planned_simulations(run.cfg.search(1))})
     t0 = time.perf_counter()
     scn, orig, tick = run.scenario, run.original, run.accident_tick
     assert scn is not None and orig is not None
@@ -399,11 +565,13 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
 
     if run.done("cyber"):
         return run.state["done"]["cyber"]
-    run.progress("cyber", {})
     t0 = time.perf_counter()
     scn, orig = run.scenario, run.original
     assert scn is not None and orig is not None
     space = run.cyber_space(module)
+    search = run.cfg.search(2, len(space.variables))
+    screening = screening_simulations(space, search.seed) if search.screen else 0
+    run.progress("cyber", {"planned": planned_simulations(search, screening)})
     horizon = run.h1_horizon
 
     def overrides(m: Mutation) -> tuple[tuple[str, float], ...]:
@@ -425,7 +593,7 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
         return out
 
     originals = {v.name: float(v.original) for v in space.variables}
-    res = run_search(space, batch, run.cfg.search(2, len(space.variables)), 2,
+    res = run_search(space, batch, search, 2,
                      checkpoint=run.out / "cyber.ckpt",
                      on_generation=lambda s: run.progress("cyber", _gen_info(s, "h2")))
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
@@ -762,16 +930,31 @@ def analyze(
     out = Path(out)
     scenario = source if isinstance(source, Scenario) else None
     recording = None if scenario is not None else Path(source)  # type: ignore[arg-type]
-    label = f"scenario:{scenario.name}" if scenario is not None else str(Path(source).resolve())  # type: ignore[arg-type]
-    state = prepare_run_dir(out, resume, label, cfg)
+    label, digest = source_identity(source)
     own = executor is None
     ex = executor if executor is not None else make_executor(cfg.executor, cfg.workers)
-    run = _Run(out, cfg, ex, progress, state)
+    # the folders this call makes: removed again if nothing was finished in them
+    made = [d for d in (out, *out.parents) if not d.exists()]
+    state: dict[str, Any] = {"done": {}}
     try:
-        return _analyze(run, scenario, recording)
+        state = prepare_run_dir(out, resume, label, cfg, digest)
+        return _analyze(_Run(out, cfg, ex, progress, state), scenario, recording)
+    except BaseException:
+        if not state["done"]:  # the run's state, which each finished phase adds to
+            _remove_if_empty(made)
+        raise
     finally:
         if own:
             ex.close()
+
+
+def _remove_if_empty(folders: list[Path]) -> None:
+    """Remove ``folders`` (deepest first) where they are empty; never anything else."""
+    for d in folders:
+        try:
+            d.rmdir()
+        except OSError:
+            return
 
 
 def _analyze(run: _Run, scenario: Scenario | None, recording: Path | None) -> dict[str, Any]:

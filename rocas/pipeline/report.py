@@ -26,6 +26,13 @@ EXPLANATIONS = {
         "Replaying the recording did not reproduce the accident (see the replay figures), so the "
         "later phases would analyse a different execution; the analysis stops here."),
 }
+#: not_reproduced when there is nothing to reproduce, by source
+NO_ACCIDENT = {
+    "recording": ("The recording holds no accident (collision or emergency braking), and its replay "
+                  "has none either: there is nothing to analyse."),
+    "scenario": ("Simulating the scenario gives no accident (collision or emergency braking): "
+                 "there is nothing to analyse."),
+}
 
 
 def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str, Any]:
@@ -37,13 +44,18 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     trig = physical.get("triggering_entity")
     module = diff.get("deviating_module")
     mis = cyber.get("misconfiguration", [])
+    from rocas.pipeline.analyze import REPORT_SETTINGS, AnalyzeConfig
     from rocas.pipeline.cyber import cyber_space
 
     searched = cyber.get("parameters")
     total = len(cyber_space(None, {}).variables)  # what --scope all searches
+    default = AnalyzeConfig()
     report = {
         "verdict": verdict,
         "explanation": "",
+        # what produced this report (a run directory from before a setting existed used its
+        # default); not the executor or workers, which do not change it
+        "settings": {k: state["config"].get(k, getattr(default, k)) for k in REPORT_SETTINGS},
         "accident": accident.to_json() if accident is not None else None,
         "replay": done.get("replay"),
         "triggering_entity": trig,
@@ -67,11 +79,70 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         entity_phrase = f"{trig['entity']} ({props})"
     params = ", ".join(f"{m['parameter']} from {_fmt(m['original'])} to {_fmt(m['mutated'])}" for m in mis)
     horizon = (accident.time_s - state["config"]["delta_s"]) if accident is not None else 0.0
+    replay = done.get("replay") or {}
+    if verdict == "not_reproduced" and _nothing_recorded(replay, accident):
+        report["explanation"] = NO_ACCIDENT[replay.get("source", "recording")]
+        return report
     report["explanation"] = EXPLANATIONS[verdict].format(
         entity_phrase=entity_phrase, module=module, module_or_none=module or "(none found)",
         params=params or "-", horizon=max(horizon, 0.0),
         scope=f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS")
     return report
+
+
+def _nothing_recorded(replay: dict[str, Any], accident: Any) -> bool:
+    """Whether the input holds no accident at all (rather than one replay missed)."""
+    if replay.get("source") == "scenario":
+        return replay.get("accident") is None
+    if "recorded_accident" in replay:
+        return replay["recorded_accident"] is None
+    # a run directory from before the replay figures were kept: a replay is "reproduced"
+    # without an accident only when the recording is accident-free too
+    return bool(replay.get("reproduced")) and accident is None
+
+
+def _accident_text(acc: dict[str, Any] | None) -> str:
+    if not acc:
+        return "no accident"
+    other = f" with {acc['other']}" if acc.get("other") else ""
+    at = f" at {acc['time_s']:.2f} s" if acc.get("time_s") is not None else ""
+    return f"{acc['kind']}{other}{at}"
+
+
+def replay_text(report: dict[str, Any]) -> str:
+    """Phase I in one line: whether the accident was reproduced, and the ego's position error
+    against the recording (the terminal's and report.md's replay line)."""
+    rep = report.get("replay") or {}
+    if rep.get("source") == "scenario":
+        return f"simulated scenario ({_accident_text(rep.get('accident'))})"
+    rmse = rep.get("ego_rmse_m")
+    if "recorded_accident" not in rep:  # a run directory from before these figures were kept
+        acc = report.get("accident")
+        text = ("reproduced" if rep.get("reproduced") else "not reproduced") + \
+            (f" ({_accident_text(acc)})" if acc else "")
+        return text + (f", ego RMSE {rmse:.3f} m" if rmse is not None else "")
+    recorded, replayed = rep["recorded_accident"], rep.get("accident")
+    if recorded is None:
+        text = "the recording holds no accident" + \
+            (", nor does its replay" if replayed is None else f"; the replay has {_accident_text(replayed)}")
+        return text + f", ego RMSE over the whole run {rmse:.3f} m"
+    if rep.get("reproduced"):
+        text = f"reproduced ({_accident_text(replayed)})"
+    else:
+        text = f"not reproduced (recorded {_accident_text(recorded)}, replay {_accident_text(replayed)})"
+    return text + f", ego RMSE before the accident {rmse:.3f} m"
+
+
+def settings_text(report: dict[str, Any]) -> str:
+    """The settings that produced the report, in one line."""
+    s = report.get("settings") or {}
+    if not s:
+        return ""
+    return (f"seed {s['seed']}, budget {s['budget']}, population {s['population']}, "
+            f"scope {s['scope']}, screening {'on' if s['screening'] else 'off'}, "
+            f"delta {_fmt(s['delta_s'])} s, validation {s['validation_variants']} variants, "
+            f"h1 limit {_fmt(s['h1_limit_m2'])} m^2, K {_fmt(s['k_suspicion'])} m, "
+            f"{s['shrink_candidates']} fixes shrunk")
 
 
 def _fmt(v: Any) -> str:
@@ -103,6 +174,10 @@ def robust_text(report: dict[str, Any], arrow: str = "→") -> str:
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
+    if report.get("settings"):
+        lines.append(f"- **Settings**: {settings_text(report)}")
+    if report.get("replay"):
+        lines.append(f"- **Replay**: {replay_text(report)}")
     acc = report["accident"]
     if acc:
         other = f" with {acc['other']}" if acc.get("other") else ""

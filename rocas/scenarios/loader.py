@@ -403,7 +403,8 @@ def scenario_from_dict(data: Mapping[str, Any], source: str = "<scenario>") -> S
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file."""
+    """Read and validate a scenario TOML file (a catalog file's ``[ground_truth]`` table is
+    left out)."""
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -413,6 +414,10 @@ def load_scenario(path: str | Path) -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{p}: not valid TOML: {exc}") from None
+    # a catalog entry is a scenario file plus the known answer, which is no part of the
+    # scenario (rocas.scenarios.catalog reads and checks it)
+    if isinstance(data.get("ground_truth"), dict):
+        del data["ground_truth"]
     return scenario_from_dict(data, source=str(p))
 
 

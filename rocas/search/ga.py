@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from rocas._fs import atomic_path
-from rocas.errors import UsageError
+from rocas.errors import InputError, UsageError
 from rocas.search.space import Mutation, MutationSpace
 
 Evaluation = tuple[tuple[float, ...], float]  # (objectives, constraint: <= 0 is feasible)
@@ -148,8 +148,7 @@ def run_search(
 
     ckpt = Path(checkpoint) if checkpoint else None
     if ckpt is not None and ckpt.exists():
-        with open(ckpt, "rb") as f:
-            state: _State = pickle.load(f)
+        state: _State = _load_checkpoint(ckpt)
     else:
         problem = SearchProblem(space.n_genes, n_objectives)
         state = _State(None, problem, [], [], {})
@@ -190,6 +189,27 @@ def run_search(
             break
 
     return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
+
+
+def _load_checkpoint(ckpt: Path) -> _State:
+    """The search state a checkpoint holds.
+
+    Raises:
+        InputError: the file cannot be read or does not hold a search state (truncated,
+            overwritten, or written by an incompatible version).
+    """
+    hint = f"delete {ckpt} to restart this search from its first generation"
+    try:
+        with open(ckpt, "rb") as f:
+            state = pickle.load(f)
+    except OSError as exc:
+        raise InputError(f"cannot read search checkpoint {ckpt}: {exc.strerror or exc}", hint) from None
+    except Exception as exc:  # noqa: BLE001 - unpickling a damaged file raises almost anything
+        raise InputError(f"search checkpoint {ckpt} is damaged ({type(exc).__name__}: {exc})",
+                         hint) from None
+    if not isinstance(state, _State):
+        raise InputError(f"search checkpoint {ckpt} does not hold a search state", hint)
+    return state
 
 
 def screening_genomes(space: MutationSpace, seed: int) -> np.ndarray:

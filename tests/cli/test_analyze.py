@@ -167,3 +167,58 @@ def test_the_shared_search_options_default_to_the_analysis_defaults():
     args, cfg = p.parse_args([]), AnalyzeConfig()
     assert (args.seed, args.budget, args.workers, args.validation, args.screening) == \
         (cfg.seed, cfg.budget, cfg.workers, cfg.validation_variants, cfg.screening)
+
+
+SMALL = ("--budget", "16", "--population", "8", "--validation", "2", "--workers", "1")
+
+
+def test_analyze_help_lists_the_executors_and_what_the_seed_seeds(rocas, capsys):
+    from rocas.search.executor import executor_names
+
+    assert rocas("analyze", "--help").code == 0
+    text = " ".join(capsys.readouterr().out.split())  # argparse prints help itself
+    assert f"where simulations run: {', '.join(executor_names())} (default local)" in text
+    assert "generated instances" not in text
+
+
+def test_a_catalog_file_is_a_scenario_and_the_report_shows_replay_and_settings(rocas, tmp_path):
+    from importlib import resources
+
+    toml = resources.files("rocas.scenarios") / "catalog" / "a10_skewed_junction_light.toml"
+    res = rocas("analyze", str(toml), "--scenario", "--out", tmp_path / "run", *SMALL)
+    assert res.code == 0, res.stderr
+    assert "replay             simulated scenario (emergency at " in res.stdout
+    assert "settings           seed 0, budget 16, population 8, scope module" in res.stdout
+
+
+def test_the_interrupt_message_says_what_is_on_disk(rocas, monkeypatch, tmp_path):
+    import importlib
+
+    cli = importlib.import_module("rocas.cli.analyze")
+    pipeline = importlib.import_module("rocas.pipeline.analyze")  # the package exports analyze()
+
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    # complete, then stopped while the .rrd is written
+    with monkeypatch.context() as m:
+        m.setattr(cli, "_write_rrd", interrupt)
+        res = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "run",
+                    *SMALL, "--rrd", tmp_path / "a.rrd")
+    assert res.code == 130
+    assert f"the analysis is complete in {tmp_path / 'run'}" in res.stderr
+    assert "--resume --rrd" in res.stderr and "no output was written" not in res.stderr
+    # stopped before a phase finished: the folder it made is gone, and the message says so
+    with monkeypatch.context() as m:
+        m.setattr(pipeline, "_phase_replay", interrupt)
+        res = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "new", *SMALL)
+    assert res.code == 130 and "nothing was kept" in res.stderr
+    assert not (tmp_path / "new").exists()
+    # stopped in a search: the finished phases and the checkpoint
+    run = tmp_path / "partial"
+    run.mkdir()
+    (run / "state.json").write_text(json.dumps({"done": {"replay": {}}}))
+    (run / "physical.ckpt").write_bytes(b"x")
+    assert cli.kept_after_interrupt(run, None) == (
+        f"finished phases (replay) and search checkpoints (physical.ckpt) are kept in {run}; "
+        "continue with --resume")

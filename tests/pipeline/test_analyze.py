@@ -89,7 +89,7 @@ def test_an_existing_run_dir_needs_resume(red_truck, serial_run):
     out, _ = serial_run
     with pytest.raises(UsageError, match="--resume"):
         analyze(red_truck, out, CFG, executor=SerialExecutor())
-    with pytest.raises(UsageError, match="other inputs or settings"):
+    with pytest.raises(UsageError, match="other settings"):
         analyze(red_truck, out, AnalyzeConfig(seed=2, budget=16, population=8), resume=True,
                 executor=SerialExecutor())
 
@@ -113,7 +113,7 @@ def test_a_run_dir_from_before_a_setting_existed_resumes_with_its_default(red_tr
     del state["config"]["screening"]  # as written before the setting was added
     (out / "state.json").write_text(json.dumps(state))
     assert _stable(analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)) == _stable(serial)
-    with pytest.raises(UsageError, match="other inputs or settings"):
+    with pytest.raises(UsageError, match="other settings"):
         analyze(red_truck, out, replace(CFG, screening=False), executor=SerialExecutor(), resume=True)
 
 
@@ -139,6 +139,7 @@ def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):
     report = analyze(brown, tmp_path / "run", CFG, executor=SerialExecutor())
     assert report["verdict"] == "not_reproduced"
     assert report["triggering_entity"] is None and report["misconfiguration"] == []
+    assert "gives no accident" in report["explanation"]
 
 
 def test_resume_inside_the_cyber_search_gives_the_same_report(red_truck, tmp_path):
@@ -157,3 +158,150 @@ def test_resume_inside_the_cyber_search_gives_the_same_report(red_truck, tmp_pat
     assert (out / "cyber.ckpt").exists()
     resumed = analyze(red_truck, out, cfg, resume=True)
     assert _stable(resumed) == _stable(whole)
+
+
+@pytest.mark.parametrize("bad", [
+    {"delta_s": -1.0}, {"delta_s": float("nan")}, {"delta_s": float("inf")}, {"population": 1},
+    {"population": 0}, {"seed": -1}, {"budget": 0}, {"executor": "bogus"}, {"workers": 0},
+    {"validation_variants": -1}, {"h1_limit_m2": float("nan")}, {"k_suspicion": 0.0},
+    {"batch_size": 0}, {"shrink_candidates": 0}, {"scope": "everything"}])
+def test_every_bad_setting_is_refused_when_the_settings_are_made(bad):
+    with pytest.raises(UsageError) as err:
+        replace(CFG, **bad)
+    assert err.value.hint  # what to do
+
+
+def test_a_run_that_stops_before_any_phase_finished_leaves_no_folder_it_made(red_truck, tmp_path):
+    def stop(phase, info):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, tmp_path / "new" / "run", CFG, executor=SerialExecutor(), progress=stop)
+    assert not (tmp_path / "new").exists()
+    # a folder that was there before stays, and so does anything in the way
+    (tmp_path / "mine").mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, tmp_path / "mine", CFG, executor=SerialExecutor(), progress=stop)
+    assert (tmp_path / "mine").is_dir()
+
+
+def test_the_input_is_identified_by_content(red_truck, serial_run, tmp_path):
+    import shutil
+
+    from rocas.pipeline.analyze import source_identity
+
+    a, b = tmp_path / "a.mcap", tmp_path / "b.mcap"
+    a.write_bytes(b"same bytes")
+    b.write_bytes(b"same bytes")
+    assert source_identity(a)[1] == source_identity(b)[1]
+    b.write_bytes(b"other bytes")  # replaced in place
+    assert source_identity(a)[1] != source_identity(b)[1]
+    # a scenario of the same name but other content is another input
+    src, serial = serial_run
+    out = tmp_path / "run"
+    shutil.copytree(src, out)
+    other = replace(red_truck, duration_s=red_truck.duration_s - 1.0)
+    assert other.name == red_truck.name
+    with pytest.raises(UsageError, match="another input"):
+        analyze(other, out, CFG, executor=SerialExecutor(), resume=True)
+    # a run directory from before: identified by its label, as it was then
+    state = json.loads((out / "state.json").read_text())
+    del state["source_sha256"]
+    (out / "state.json").write_text(json.dumps(state))
+    assert _stable(analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)) == _stable(serial)
+    with pytest.raises(UsageError, match="another input"):
+        analyze(replace(red_truck, name="renamed"), out, CFG, executor=SerialExecutor(), resume=True)
+
+
+def test_a_settings_mismatch_names_the_settings(red_truck, serial_run):
+    out, _ = serial_run
+    with pytest.raises(UsageError, match=r"seed 2 vs 1, budget 24 vs 16"):
+        analyze(red_truck, out, replace(CFG, seed=2, budget=24), resume=True, executor=SerialExecutor())
+
+
+def test_temporaries_a_killed_run_left_are_debris(red_truck, serial_run, tmp_path):
+    import shutil
+
+    from rocas.pipeline.analyze import prepare_run_dir
+
+    # killed during the replay: nothing but a temporary
+    out = tmp_path / "killed"
+    out.mkdir()
+    (out / ".accident.mcap.x1y2z3.part").write_bytes(b"half")
+    state = prepare_run_dir(out, False, "label", CFG, "digest")
+    assert state["done"] == {} and list(out.iterdir()) == []
+    # ... and resumed later: the temporary goes, the run goes on
+    src, serial = serial_run
+    shutil.copytree(src, tmp_path / "run")
+    (tmp_path / "run" / ".reference.mcap.abcd.part").write_bytes(b"half")
+    assert _stable(analyze(red_truck, tmp_path / "run", CFG, executor=SerialExecutor(),
+                           resume=True)) == _stable(serial)
+    assert not list((tmp_path / "run").glob("*.part"))
+    # a temporary beside other files is not rocas's to remove
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep")
+    (tmp_path / "mine" / ".notes.txt.1234.part").write_text("keep")
+    with pytest.raises(UsageError, match="not a rocas run directory"):
+        analyze(red_truck, tmp_path / "mine", CFG, executor=SerialExecutor())
+    assert len(list((tmp_path / "mine").iterdir())) == 2
+
+
+def test_the_report_names_the_settings_that_produced_it(serial_run):
+    from rocas.pipeline.analyze import REPORT_SETTINGS
+
+    out, report = serial_run
+    assert report["settings"] == {k: getattr(CFG, k) for k in REPORT_SETTINGS}
+    assert "executor" not in report["settings"] and "workers" not in report["settings"]
+    assert "- **Settings**: seed 1, budget 16, population 8," in (out / "report.md").read_text()
+
+
+def test_a_damaged_run_directory_is_an_input_error(red_truck, serial_run, tmp_path):
+    import shutil
+
+    from rocas.errors import InputError
+
+    src, _ = serial_run
+    out = tmp_path / "run"
+    shutil.copytree(src, out)
+    text = (out / "state.json").read_text()
+    (out / "state.json").write_text(text[: len(text) // 2])
+    with pytest.raises(InputError, match="state.json") as err:
+        analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)
+    assert f"delete {out}" in err.value.hint
+    # a search checkpoint cut short by a crash
+    out = tmp_path / "ckpt"
+
+    def stop_after_a_generation(phase, info):  # the first one is checkpointed by then
+        if phase == "physical" and info.get("generation", 0) > 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, out, CFG, executor=SerialExecutor(), progress=stop_after_a_generation)
+    ckpt = out / "physical.ckpt"
+    ckpt.write_bytes(ckpt.read_bytes()[:100])
+    with pytest.raises(InputError, match="physical.ckpt") as err:
+        analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)
+    assert "delete" in err.value.hint
+
+
+def test_the_budget_rule_and_the_planned_simulations():
+    from rocas.pipeline.analyze import planned_simulations
+
+    default = AnalyzeConfig()
+    # the defaults as before: 7 cyber generations after a 36-parameter screening
+    assert default.search(2, 36).generations == 7 and default.search(1).generations == 10
+    assert planned_simulations(default.search(2, 36), 63) == 63 + 6 * 24 <= default.budget
+    assert planned_simulations(default.search(1)) == 240
+    # a screening that uses up the budget is still followed by a generation of new mutants
+    small = AnalyzeConfig(budget=48, population=12)
+    assert small.search(2, 36).generations == 2
+    assert planned_simulations(small.search(2, 36), 63) == 75
+    assert planned_simulations(replace(small, screening=False).search(2, 36)) == 48
+
+
+def test_the_cyber_search_adds_new_mutants_after_a_screening_larger_than_the_budget(serial_run):
+    out, _ = serial_run
+    cyber = json.loads((out / "cyber.json").read_text())
+    assert 2 * cyber["parameters"] > CFG.budget
+    screened = cyber["generations"][0]["evaluations"]
+    assert cyber["generations"][-1]["evaluations"] > screened

@@ -118,3 +118,12 @@ def test_a_derived_light_facing_survives_the_round_trip():
         del tl["facing_deg"]
     s = scenario_from_dict(d)
     assert scenario_from_dict(scenario_to_dict(s)) == s
+
+
+def test_a_catalog_file_loads_as_its_scenario():
+    from importlib import resources
+
+    from rocas.scenarios.catalog import entry
+
+    path = resources.files("rocas.scenarios") / "catalog" / "a10_skewed_junction_light.toml"
+    assert load_scenario(path) == entry("A10").scenario

@@ -1,0 +1,44 @@
+"""The report's words for what the run directory's state says."""
+
+from rocas.pipeline.analyze import Accident
+from rocas.pipeline.report import build_report, markdown, replay_text
+
+
+def _state(replay):
+    return {"config": {"delta_s": 3.0, "seed": 4}, "done": {"replay": replay},
+            "timings_s": {"replay": 0.5}, "evaluations": {"replay": 1}}
+
+
+def test_a_recording_without_an_accident_is_said_to_hold_none():
+    clean = {"source": "recording", "reproduced": True, "recorded_accident": None,
+             "accident": None, "ego_rmse_m": 0.0123, "compared_until_s": 20.0}
+    report = build_report(_state(clean), None, "not_reproduced")
+    assert "holds no accident" in report["explanation"]
+    assert "did not reproduce" not in report["explanation"]
+    assert replay_text(report) == ("the recording holds no accident, nor does its replay, "
+                                   "ego RMSE over the whole run 0.012 m")
+    assert "- **Replay**: the recording holds no accident" in markdown(report)
+    # a run directory from before the replay figures were kept says the same
+    old = build_report(_state({"reproduced": True, "ego_rmse_m": 0.01}), None, "not_reproduced")
+    assert "holds no accident" in old["explanation"]
+
+
+def test_an_accident_the_replay_missed_is_not_reproduced():
+    recorded = {"kind": "collision", "time_s": 5.0, "other": "obstacle_2"}
+    missed = {"source": "recording", "reproduced": False, "recorded_accident": recorded,
+              "accident": None, "ego_rmse_m": 1.5, "compared_until_s": 5.0}
+    report = build_report(_state(missed), None, "not_reproduced")
+    assert "did not reproduce the accident" in report["explanation"]
+    assert replay_text(report) == ("not reproduced (recorded collision with obstacle_2 at 5.00 s, "
+                                   "replay no accident), ego RMSE before the accident 1.500 m")
+
+
+def test_the_replay_line_of_a_reproduced_accident():
+    acc = {"kind": "emergency", "time_s": 10.15, "other": None}
+    rep = {"source": "recording", "reproduced": True, "recorded_accident": acc, "accident": acc,
+           "ego_rmse_m": 0.0351, "compared_until_s": 10.2}
+    report = build_report(_state(rep), Accident("emergency", 10.15, None), "no_reference")
+    assert replay_text(report) == \
+        "reproduced (emergency at 10.15 s), ego RMSE before the accident 0.035 m"
+    # the settings a run directory from before a setting existed used are its defaults
+    assert report["settings"]["seed"] == 4 and report["settings"]["budget"] == 240
