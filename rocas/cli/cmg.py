@@ -23,7 +23,7 @@ from rocas.analysis.cmg import (
     load_cmg,
     resolve_topology,
 )
-from rocas.cli.console import Env
+from rocas.cli.console import Env, prose
 from rocas.errors import TopologyError
 from rocas.recording.annotate import read_channels
 from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo
@@ -227,20 +227,20 @@ def _print_text(view: CmgView, env: Env) -> None:
     if modules:
         out.print("Modules:")
         for name, io in modules.items():
-            out.print(f"  {name}: reads {', '.join(io['reads']) or '-'}; "
+            prose(out, f"  {name}: reads {', '.join(io['reads']) or '-'}; "
                       f"writes {', '.join(io['writes']) or '-'}")
     else:
         out.print("Modules: none (no channel names a writer or reader)")
     if view.control_channel:
-        out.print(f"Control channel: {view.control_channel} (from {view.control_source})")
+        prose(out, f"Control channel: {view.control_channel} (from {view.control_source})")
     else:
-        out.print(f"Control channel: unknown ({view.control_source})")
+        prose(out, f"Control channel: unknown ({view.control_source})")
     for note in view.notes:
-        out.print(f"Note: {note}")
+        prose(out, f"Note: {note}")
     if view.hints:
         out.print("What to add:")
         for hint in view.hints:
-            out.print(f"  - {hint}")
+            prose(out, f"  - {hint}")
     else:
         out.print("Nothing missing: every channel has writers and readers.")
 

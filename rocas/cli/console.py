@@ -22,14 +22,12 @@ class Env:
     stderr: TextIO = field(default_factory=lambda: sys.stderr)
 
     def out(self) -> Console:
-        """A rich console on stdout.
+        """A rich console on stdout (plain text, 160 columns, when stdout is not a terminal).
 
-        When stdout is not a terminal: plain text, tables 160 columns wide, and lines of prose
-        never broken (a pipe or a file has no width to wrap to, and grep needs whole lines).
+        Lines of prose are printed with :func:`prose`, which never breaks them: a pipe or a
+        file has no width to wrap to, and grep needs whole lines.
         """
-        tty = _isatty(self.stdout)
-        return Console(file=self.stdout, highlight=False, width=None if tty else 160,
-                       soft_wrap=not tty)
+        return Console(file=self.stdout, highlight=False, width=None if _isatty(self.stdout) else 160)
 
     def err(self) -> Console:
         """A rich console on stderr (for progress bars)."""
@@ -49,3 +47,8 @@ def _isatty(stream: TextIO) -> bool:
         return stream.isatty()
     except (AttributeError, ValueError):
         return False
+
+
+def prose(console: Console, *parts: object) -> None:
+    """Print one line of prose unbroken (the terminal, if any, wraps it)."""
+    console.print(*parts, soft_wrap=True)

@@ -7,7 +7,7 @@ import json
 from typing import TYPE_CHECKING
 
 from rocas._fs import check_writable
-from rocas.cli.console import Env
+from rocas.cli.console import Env, prose
 
 if TYPE_CHECKING:
     from rocas.analysis.changepoints import ChangePointConfig
@@ -111,7 +111,7 @@ def render(result: DiffResult, env: Env) -> None:
     out.print(table)
     out.print()
     if p.deviating_module:
-        out.print("Walk:  " + " -> ".join(p.path))
+        prose(out, "Walk:  " + " -> ".join(p.path))
         out.print(Text.assemble("Initial deviating module: ",
                                 (p.deviating_module, "bold red")))
     else:
@@ -122,7 +122,7 @@ def render(result: DiffResult, env: Env) -> None:
         out.print()
         out.print("Other modules:")
         for m, why in sorted(p.exclusions.items()):
-            out.print(f"  {m}: {why}")
+            prose(out, f"  {m}: {why}")
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
