@@ -11,7 +11,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from types import TracebackType
 from typing import Any, Protocol, TypeVar
 
@@ -53,8 +53,12 @@ class SerialExecutor:
 class LocalExecutor:
     """A process pool over this machine's cores (spawned workers, kept for reuse).
 
-    Tasks are split into contiguous chunks, one list of results per chunk, reassembled in
-    order. With one worker (or one task) it runs in-process, without a pool.
+    Each task goes to a worker on its own and a worker is given its next task only when it
+    has returned its last one, so at most one task per worker is under way at any time. An
+    interruption (Ctrl-C, SIGTERM) therefore waits for at most one task per worker, not for
+    a share of the whole list: callers keep tasks small (:func:`rocas.pipeline.evaluate.evaluate`
+    sends batches of at most ``batch_size`` simulations). Results come back in task order.
+    With one worker (or one task) it runs in-process, without a pool.
     """
 
     name = "local"
@@ -76,14 +80,28 @@ class LocalExecutor:
         tasks = list(tasks)
         if self.workers == 1 or len(tasks) <= 1:
             return [fn(t) for t in tasks]
-        n_chunks = min(self.workers, len(tasks))
-        bounds = [round(i * len(tasks) / n_chunks) for i in range(n_chunks + 1)]
-        chunks = [tasks[bounds[i]:bounds[i + 1]] for i in range(n_chunks)]
         pool = self._get_pool()
-        futures = [pool.submit(_run_chunk, fn, c) for c in chunks]
-        out: list[R] = []
-        for f in futures:
-            out.extend(f.result())
+        out: list[Any] = [None] * len(tasks)
+        under_way: dict[Future[R], int] = {}
+        following = iter(range(len(tasks)))
+
+        def give_next() -> None:
+            i = next(following, None)
+            if i is not None:
+                under_way[pool.submit(fn, tasks[i])] = i
+
+        try:
+            for _ in range(self.workers):
+                give_next()
+            while under_way:
+                finished, _ = wait(under_way, return_when=FIRST_COMPLETED)
+                for f in finished:
+                    out[under_way.pop(f)] = f.result()
+                    give_next()
+        except BaseException:
+            for f in under_way:  # only what already runs is left to finish (see close)
+                f.cancel()
+            raise
         return out
 
     def close(self) -> None:
@@ -97,10 +115,6 @@ class LocalExecutor:
     def __exit__(self, et: type[BaseException] | None, e: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.close()
-
-
-def _run_chunk(fn: Callable[[Any], Any], chunk: list[Any]) -> list[Any]:
-    return [fn(t) for t in chunk]
 
 
 _REGISTRY: dict[str, Callable[[int | None], Executor]] = {}
