@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from types import TracebackType
@@ -59,6 +60,10 @@ class LocalExecutor:
     a share of the whole list: callers keep tasks small (:func:`rocas.pipeline.evaluate.evaluate`
     sends batches of at most ``batch_size`` simulations). Results come back in task order.
     With one worker (or one task) it runs in-process, without a pool.
+
+    A worker exits as soon as the process that started it is gone, even killed (SIGKILL),
+    instead of running on as an orphan: it waits on the sentinel multiprocessing gives every
+    spawned process (a pipe on POSIX, the parent's handle on Windows).
     """
 
     name = "local"
@@ -73,7 +78,8 @@ class LocalExecutor:
     def _get_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
             ctx = multiprocessing.get_context("spawn")
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx)
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+                                             initializer=_start_worker)
         return self._pool
 
     def map(self, fn: Callable[[T], R], tasks: Sequence[T]) -> list[R]:
@@ -115,6 +121,19 @@ class LocalExecutor:
     def __exit__(self, et: type[BaseException] | None, e: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.close()
+
+
+def _start_worker() -> None:
+    """Runs first in every worker: a watcher thread ends the worker when its parent is gone."""
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_with, args=(parent,), name="rocas-parent-watch",
+                         daemon=True).start()
+
+
+def _exit_with(parent: Any) -> None:
+    parent.join()  # returns once the parent has exited, however it ended
+    os._exit(1)
 
 
 _REGISTRY: dict[str, Callable[[int | None], Executor]] = {}

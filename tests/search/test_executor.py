@@ -41,3 +41,38 @@ def test_an_interruption_waits_for_at_most_one_task_per_worker(tmp_path):
     # two finished, two under way when the signal came, and two given to the workers while it
     # was on its way (the whole list, 40, when each worker got half of it in one piece)
     assert len(os.listdir(tmp_path)) <= 6
+
+
+def _gone(pid: int) -> bool:
+    """The process has exited (an orphan adopted by a PID 1 that does not reap stays a zombie)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="reads /proc")
+def test_workers_exit_when_the_main_process_is_killed(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import rocas
+
+    script = ("import executor_tasks, sys\n"
+              "from rocas.search import LocalExecutor\n"
+              "if __name__ == '__main__':\n"
+              "    with LocalExecutor(workers=2) as pool:\n"
+              "        pool.map(executor_tasks.note_pid_and_sleep, [(sys.argv[1], 0.5)] * 100)\n")
+    paths = [str(Path(rocas.__file__).parents[1]), str(Path(executor_tasks.__file__).parent)]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
+    main = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=env)
+    try:
+        _wait_for(lambda: len(os.listdir(tmp_path)) >= 2)
+    finally:
+        main.kill()
+        main.wait()
+    workers = [int(name.removeprefix("pid-")) for name in os.listdir(tmp_path)]
+    # each worker was in the middle of a 0.5 s task (and had 50 to go in its share before)
+    _wait_for(lambda: all(_gone(pid) for pid in workers), timeout_s=3.0)
