@@ -8,10 +8,12 @@ what lets a distributed engine take over later: it only has to implement ``map``
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
+import signal
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from types import TracebackType
 from typing import Any, Protocol, TypeVar
@@ -63,7 +65,10 @@ class LocalExecutor:
 
     A worker exits as soon as the process that started it is gone, even killed (SIGKILL),
     instead of running on as an orphan: it waits on the sentinel multiprocessing gives every
-    spawned process (a pipe on POSIX, the parent's handle on Windows).
+    spawned process (a pipe on POSIX, the parent's handle on Windows). Workers ignore SIGINT and
+    SIGTERM, from their start: a terminal's Ctrl-C or ``timeout`` signals the whole process
+    group, and stopping is the main process's decision (it ends the workers as it closes the
+    pool), not a worker's (which would break the pool, or print its own traceback).
     """
 
     name = "local"
@@ -97,8 +102,9 @@ class LocalExecutor:
                 under_way[pool.submit(fn, tasks[i])] = i
 
         try:
-            for _ in range(self.workers):
-                give_next()
+            with _stop_signals_held():  # the first submissions start the workers
+                for _ in range(self.workers):
+                    give_next()
             while under_way:
                 finished, _ = wait(under_way, return_when=FIRST_COMPLETED)
                 for f in finished:
@@ -123,8 +129,35 @@ class LocalExecutor:
         self.close()
 
 
+#: the signals that ask rocas to stop; only the main process acts on them
+_STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM") if hasattr(signal, n))
+
+
+@contextlib.contextmanager
+def _stop_signals_held() -> Iterator[None]:
+    """Block the stop signals in this thread while it starts workers: a new process inherits the
+    mask, so a worker never sees them, even while it imports before :func:`_start_worker` can
+    ignore them. None is lost: one that comes meanwhile goes to another thread of this process
+    or waits for the mask to be lifted, and Python runs its handler in the main thread as usual.
+    Nothing is done where there are no signal masks.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 def _start_worker() -> None:
-    """Runs first in every worker: a watcher thread ends the worker when its parent is gone."""
+    """Runs first in every worker: ignore the stop signals (see LocalExecutor), and end the
+    worker from a watcher thread when its parent is gone."""
+    for s in _STOP_SIGNALS:
+        signal.signal(s, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
     parent = multiprocessing.parent_process()
     if parent is not None:
         threading.Thread(target=_exit_with, args=(parent,), name="rocas-parent-watch",
