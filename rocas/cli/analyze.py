@@ -155,7 +155,9 @@ class _Progress:
         else:
             if phase == "validation" and "simulations" in info:
                 info = dict(info)  # the count column shows the simulations, the text the rest
-                self._done[phase] = info.pop("simulations")
+                total = self._done[phase] = info.pop("simulations")
+                n = info.pop("evaluations", 0)
+                self._p.update(task, total=total, completed=n, count=f"{n}/{total}")
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 
