@@ -55,3 +55,11 @@ __all__ = [
     "TopologyError",
     "UsageError",
 ]
+
+
+class Terminated(KeyboardInterrupt):
+    """The process was asked to stop (SIGTERM, e.g. from ``timeout`` or a job scheduler).
+
+    A KeyboardInterrupt, so that whatever cleans up after Ctrl-C and says what it kept does
+    the same for it; the CLI raises it from its SIGTERM handler and exits with 143 (128 + 15).
+    """

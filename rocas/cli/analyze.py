@@ -110,7 +110,7 @@ def kept_after_interrupt(out: Path, rrd: str | None) -> str:
     if done:
         kept.append(f"finished phases ({', '.join(done)})")
     if checkpoints:
-        kept.append(f"search checkpoints ({', '.join(checkpoints)})")
+        kept.append(f"checkpoints of the phase under way ({', '.join(checkpoints)})")
     return f"{' and '.join(kept)} are kept in {out}; continue with --resume"
 
 
@@ -187,7 +187,9 @@ class _Progress:
         else:
             if phase == "validation" and "simulations" in info:
                 info = dict(info)  # the count column shows the simulations, the text the rest
-                self._done[phase] = info.pop("simulations")
+                total = self._done[phase] = info.pop("simulations")
+                n = info.pop("evaluations", 0)
+                self._p.update(task, total=total, completed=n, count=f"{n}/{total}")
             self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
 
 

@@ -12,16 +12,19 @@ Only this module turns exceptions into ``rocas: error: ...`` lines and exit code
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
+import threading
 import traceback
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import NoReturn
 
 from rocas import __version__
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus, exit_status_for
-from rocas.errors import RocasError
+from rocas.errors import RocasError, Terminated
 
 #: Command name -> module under rocas.cli. Modules that are not present are not offered.
 COMMANDS: dict[str, str] = {
@@ -98,13 +101,14 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
         parser.print_help(env.stderr)
         return ExitStatus.USAGE
     try:
-        return int(args._run(args, env))
+        with _sigterm_interrupts():
+            return int(args._run(args, env))
     except KeyboardInterrupt as exc:
         if args.traceback:
             traceback.print_exc(file=env.stderr)
         kept = getattr(exc, "kept", None) or "no output was written"
         env.error(f"interrupted ({kept})")
-        return ExitStatus.INTERRUPTED
+        return exit_status_for(exc)
     except RocasError as exc:
         if args.traceback:
             traceback.print_exc(file=env.stderr)
@@ -120,6 +124,30 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
             "(this is a bug in rocas; rerun with --traceback and report it)"
         )
         return ExitStatus.INTERNAL
+
+
+@contextlib.contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """While a command runs, SIGTERM stops it as Ctrl-C does: it raises :class:`Terminated` (a
+    KeyboardInterrupt) in the main thread, so the same cleanup runs and the same line says what
+    was kept. Further SIGTERMs while it stops are ignored. Outside the main thread (where no
+    handler can be installed) SIGTERM keeps its previous meaning."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        yield
+        return
+    raised = False
+
+    def stop(signum: int, frame: object) -> None:
+        nonlocal raised
+        if not raised:
+            raised = True
+            raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def console_script() -> NoReturn:

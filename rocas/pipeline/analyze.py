@@ -16,6 +16,8 @@ Run directory::
     diff.json         rocas diff between accident.mcap and reference.mcap
     cyber.ckpt / cyber.json
     fixed.mcap        the original scenario with the fixed configuration
+    validation.ckpt   what the finished slices of the validation found (while it runs)
+    validation.json   the regression test and the robust-value sweep
     report.json / report.md
 """
 
@@ -827,11 +829,21 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
     return out
 
 
+#: simulations of phase V per slice, in batches (of AnalyzeConfig.batch_size) per worker: after
+#: each slice the progress bar advances and the finished simulations are checkpointed
+VALIDATION_SLICE_BATCHES = 4
+
+
 def _phase_validation(run: _Run, fix: dict[str, float], module: str | None) -> dict[str, Any]:
     """The paper's regression test: K perturbed variants with the original configuration and
     with the minimal fix. Then the robust value: the fix moved further the same way
     (STRONGER_FRACTIONS), each stronger value run on the accident (it must still avoid it and
-    keep the ego's earlier trajectory, h1) and on the same variants."""
+    keep the ego's earlier trajectory, h1) and on the same variants.
+
+    The simulations run in slices (VALIDATION_SLICE_BATCHES batches per worker); after each, the
+    progress callback gets the running count (``evaluations``) and what the finished ones found
+    (accident or not, and h1 where the sweep needs it) is written to ``validation.ckpt``, so a
+    resumed run goes on after the last finished slice. Results do not depend on the slicing."""
     if run.done("validation"):
         return run.state["done"]["validation"]
     t0 = time.perf_counter()
@@ -845,27 +857,56 @@ def _phase_validation(run: _Run, fix: dict[str, float], module: str | None) -> d
     for params in configs[1:]:
         tasks.append(VariantTask(run.scenario, params, run.scenario.seed))
         tasks += [VariantTask(v, params, v.seed) for v in variants]
-    run.progress("validation", {"variants": n, "simulations": len(tasks)})
-    res = evaluate(run.executor, tasks, run.cfg.batch_size)
-
-    def rate(rs: list[VariantResult]) -> float:
-        return sum(not is_accident(r.outcome) for r in rs) / n
-
-    ok_orig, ok_fixed = (rate(res[:n]), rate(res[n:2 * n])) if n else (None, None)
+    on_accident = [2 * n + k * (n + 1) for k in range(len(stronger))]  # each stronger value's first
     horizon = run.h1_horizon
+    ckpt = run.out / "validation.ckpt"
+    found = _validation_checkpoint(ckpt, fix, len(tasks))
+    step = run.cfg.batch_size * VALIDATION_SLICE_BATCHES * max(1, getattr(run.executor, "workers", 1))
+    while True:
+        start = len(found["accident"])
+        run.progress("validation", {"variants": n, "simulations": len(tasks), "evaluations": start})
+        if start == len(tasks):
+            break
+        for i, r in enumerate(evaluate(run.executor, tasks[start:start + step], run.cfg.batch_size),
+                              start):
+            found["accident"].append(is_accident(r.outcome))
+            if i in on_accident:
+                found["h1_m2"][str(i)] = ego_dissimilarity(run.original.ego_xy, r.ego_xy, horizon)
+        write_text_atomic(ckpt, json.dumps(found))
+    accident = found["accident"]
+
+    def rate(first: int) -> float:
+        return sum(not a for a in accident[first:first + n]) / n
+
+    ok_orig, ok_fixed = (rate(0), rate(n)) if n else (None, None)
     sweep = []
-    for k, (f, values) in enumerate(stronger):
-        first = 2 * n + k * (n + 1)
-        on_accident = res[first]
-        h1 = ego_dissimilarity(run.original.ego_xy, on_accident.ego_xy, horizon)
-        sweep.append({"fraction": f, "fix": values, "avoids_accident": not is_accident(on_accident.outcome),
-                      "h1_m2": round(h1, 6), "success_rate": rate(res[first + 1:first + 1 + n])})
+    for (f, values), first in zip(stronger, on_accident, strict=True):
+        sweep.append({"fraction": f, "fix": values, "avoids_accident": not accident[first],
+                      "h1_m2": round(found["h1_m2"][str(first)], 6), "success_rate": rate(first + 1)})
     result = {"variants": n, "success_rate_original": ok_orig, "success_rate_fixed": ok_fixed,
               "fix_makes_it_worse": bool(n and ok_fixed < ok_orig),  # type: ignore[operator]
               "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2)}
     write_text_atomic(run.out / "validation.json", json.dumps(result, indent=1))
     run.finish("validation", result, time.perf_counter() - t0, len(tasks))
+    ckpt.unlink(missing_ok=True)
     return result
+
+
+def _validation_checkpoint(path: Path, fix: Mapping[str, float], simulations: int) -> dict[str, Any]:
+    """What the finished slices of phase V found, in task order (``accident``: one flag per
+    simulation; ``h1_m2``: task index -> h1 of the stronger values' runs on the accident); empty
+    when there is no checkpoint, or one of another fix or size (then it is started afresh)."""
+    fresh = {"fix": dict(fix), "simulations": simulations, "accident": [], "h1_m2": {}}
+    if not path.exists():
+        return fresh
+    try:
+        saved = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return fresh
+    if not isinstance(saved, dict) or saved.get("fix") != fresh["fix"] \
+            or saved.get("simulations") != simulations:
+        return fresh
+    return saved
 
 
 def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: float

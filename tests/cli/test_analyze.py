@@ -76,6 +76,22 @@ def test_progress_bars_finish_each_phase_when_the_next_starts():
     assert "0/?" not in err.getvalue()
 
 
+def test_the_validation_bar_counts_the_finished_simulations():
+    import io
+
+    from rocas.cli.analyze import _Progress
+    from rocas.cli.console import Env
+
+    with _Progress(Env(stdout=io.StringIO(), stderr=io.StringIO()), {"validation": 1405}) as p:
+        bar = lambda: next(t for t in p._p.tasks if t.description == "validation")  # noqa: E731
+        # phase V reports after each slice; 1405 is the most it can need, 1390 what it runs
+        p("validation", {"variants": 200, "simulations": 1390, "evaluations": 0})
+        assert bar().fields["count"] == "0/1390" and bar().fields["info"] == "variants 200"
+        p("validation", {"variants": 200, "simulations": 1390, "evaluations": 256})
+        assert (bar().completed, bar().total, bar().fields["count"]) == (256, 1390, "256/1390")
+    assert bar().finished and bar().fields["count"] == "1390 sims"
+
+
 def test_progress_shows_the_best_accident_free_value_so_far():
     import io
 

@@ -16,6 +16,7 @@ from rocas.errors import (
     RecordingError,
     RocasError,
     ScenarioError,
+    Terminated,
     TopologyError,
     UsageError,
 )
@@ -53,9 +54,10 @@ def _patch_diff(monkeypatch, exc: BaseException) -> None:
 def test_the_documented_exit_codes():
     assert {s.name: int(s) for s in ExitStatus} == {
         "SUCCESS": 0, "INTERNAL": 1, "USAGE": 2, "INPUT": 3, "NOT_REPRODUCED": 4,
-        "OUTPUT": 5, "INTERRUPTED": 130,
+        "OUTPUT": 5, "INTERRUPTED": 130, "TERMINATED": 143,
     }
     assert exit_status_for(KeyboardInterrupt()) == 130
+    assert exit_status_for(Terminated()) == 143
     assert exit_status_for(ZeroDivisionError()) == 1
 
 

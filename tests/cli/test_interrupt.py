@@ -3,8 +3,10 @@ that looks complete but is not."""
 
 from __future__ import annotations
 
+import json
 import os
 import pkgutil
+import signal
 
 import pytest
 
@@ -26,6 +28,37 @@ def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
         return original(*args, **kwargs)
 
     monkeypatch.setattr(owner, attr, wrapper)
+
+
+def _terminate_after(monkeypatch, target: str, calls: int) -> None:
+    """Make ``target`` send SIGTERM to this process on call number ``calls + 1`` (and go on)."""
+    owner_path, _, attr = target.rpartition(".")
+    owner = pkgutil.resolve_name(owner_path)
+    original = getattr(owner, attr)
+    seen = {"n": 0}
+
+    def wrapper(*args, **kwargs):
+        seen["n"] += 1
+        if seen["n"] == calls + 1:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, attr, wrapper)
+
+
+class _SigtermNotHandled(Exception):
+    pass
+
+
+@pytest.fixture
+def sigterm_guard():
+    """A SIGTERM that rocas does not handle ends in this exception, not in the end of pytest."""
+    def fallback(signum, frame):
+        raise _SigtermNotHandled
+
+    previous = signal.signal(signal.SIGTERM, fallback)
+    yield
+    signal.signal(signal.SIGTERM, previous)
 
 
 def _only_line(stderr: str) -> str:
@@ -105,3 +138,28 @@ def test_bench_says_the_run_directories_resume(rocas, monkeypatch, tmp_path):
     assert res.code == 130
     line = _only_line(res.stderr)
     assert f"kept in {tmp_path / 'bench'}" in line and "resumes" in line
+
+
+def test_sigterm_stops_like_ctrl_c_with_exit_143(rocas, monkeypatch, tmp_path, example_toml,
+                                                 sigterm_guard):
+    _terminate_after(monkeypatch, "rocas.recording.writer.RecordingWriter.write", 200)
+    out = tmp_path / "run.mcap"
+    res = rocas("simulate", example_toml, "-o", out, "--no-progress")
+    assert res.code == 143, res.stderr
+    assert _only_line(res.stderr) == "rocas: error: interrupted (no output was written)"
+    assert "Warning" not in res.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_sigterm_keeps_the_finished_phases_of_an_analysis(rocas, monkeypatch, tmp_path,
+                                                          sigterm_guard):
+    out = tmp_path / "run"
+    args = ["analyze", "roundabout_red_truck", "--scenario", "--out", out, "--budget", "16",
+            "--population", "8", "--validation", "4", "--workers", "1", "--json"]
+    _terminate_after(monkeypatch, "rocas.pipeline.analyze._phase_diff", 0)
+    res = rocas(*args)
+    assert res.code == 143, res.stderr
+    assert f"kept in {out}; continue with --resume" in _only_line(res.stderr)
+    assert set(json.loads((out / "state.json").read_text())["done"]) == {"replay", "physical"}
+    monkeypatch.undo()
+    assert rocas(*args, "--resume").code == 0

@@ -1,8 +1,12 @@
 """Phase V beyond the paper's regression test: the fix moved further the same way, and the
 robust value chosen from those stronger values."""
 
+import importlib
+import json
+
 import pytest
 
+from rocas.pipeline import AnalyzeConfig, analyze
 from rocas.pipeline.analyze import (
     ROBUST_TOLERANCE,
     STRONGER_FRACTIONS,
@@ -11,6 +15,8 @@ from rocas.pipeline.analyze import (
     validation_simulations,
 )
 from rocas.pipeline.cyber import cyber_space
+from rocas.scenarios import load_example
+from rocas.search import SerialExecutor
 
 
 def test_stronger_values_go_on_the_way_the_fix_went_to_the_end_of_the_range():
@@ -80,3 +86,49 @@ def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not
     rob = _robust(0.5, _sweep(0.9, 0.95, 1.0, 1.0, 1.0, avoids=[False, True, True, True, True],
                               h1=[0.0, 2.0, 0.5, 0.5, 0.5]), h1_limit=1.0)
     assert rob is not None and rob["fraction"] == 0.5
+
+
+def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_path, monkeypatch):
+    import shutil
+
+    analyze_module = importlib.import_module("rocas.pipeline.analyze")  # the name is also a function
+    monkeypatch.setattr(analyze_module, "VALIDATION_SLICE_BATCHES", 1)  # slices of 32 simulations
+    red_truck = load_example("roundabout_red_truck")
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=12)
+    out = tmp_path / "run"
+    counts = []
+
+    def stop_in_validation(phase, info):
+        if phase == "validation":
+            counts.append(info.get("evaluations"))
+            if info.get("evaluations", 0) >= 32:
+                raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        analyze(red_truck, out, cfg, executor=SerialExecutor(), progress=stop_in_validation)
+    assert counts == [0, 32]
+    assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 32
+
+    # the same run without the interruption: phases I-IV as they were, the validation whole
+    whole_dir = tmp_path / "whole"
+    shutil.copytree(out, whole_dir)
+    (whole_dir / "validation.ckpt").unlink()
+    counts.clear()
+    whole = analyze(red_truck, whole_dir, cfg, executor=SerialExecutor(), resume=True,
+                    progress=lambda phase, info: counts.append(info.get("evaluations"))
+                    if phase == "validation" else None)
+    total = whole["evaluations"]["validation"]
+    assert total == validation_simulations(12) == 89
+    assert counts == [0, 32, 64, 89]  # the bar advances slice by slice
+
+    # resumed with other slices (the results do not depend on them), from the 33rd simulation
+    monkeypatch.setattr(analyze_module, "VALIDATION_SLICE_BATCHES", 2)
+    counts.clear()
+    resumed = analyze(red_truck, out, cfg, executor=SerialExecutor(), resume=True,
+                      progress=lambda phase, info: counts.append(info.get("evaluations"))
+                      if phase == "validation" else None)
+    assert counts == [32, 89]
+    assert {k: v for k, v in resumed.items() if k != "timings_s"} == \
+        {k: v for k, v in whole.items() if k != "timings_s"}
+    assert json.loads((out / "validation.json").read_text()) == whole["validation"]
+    assert not (out / "validation.ckpt").exists()

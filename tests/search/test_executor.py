@@ -1,0 +1,78 @@
+"""The local process pool: results in task order, prompt interruption, no orphaned workers."""
+
+import os
+import signal
+import threading
+import time
+
+import executor_tasks
+import pytest
+
+from rocas.search import LocalExecutor, SerialExecutor
+
+
+def _wait_for(condition, timeout_s=60.0):
+    end = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > end:
+            raise AssertionError("timed out")
+        time.sleep(0.01)
+
+
+def test_results_come_back_in_task_order(tmp_path):
+    tasks = [(str(tmp_path), i, 0.01 * (i % 3)) for i in range(11)]
+    with LocalExecutor(workers=2) as pool:
+        assert pool.map(executor_tasks.slow_touch, tasks) == list(range(11))
+    assert SerialExecutor().map(executor_tasks.slow_touch, tasks) == list(range(11))
+
+
+def test_an_interruption_waits_for_at_most_one_task_per_worker(tmp_path):
+    # SIGINT to this process only (as kill -INT PID or a job scheduler sends it): the workers
+    # do not see it, so whatever they were given still runs before the pool closes
+    tasks = [(str(tmp_path), i, 0.05) for i in range(40)]
+
+    def interrupt_after_two_tasks():
+        _wait_for(lambda: len(os.listdir(tmp_path)) >= 2)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=interrupt_after_two_tasks, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt), LocalExecutor(workers=2) as pool:
+        pool.map(executor_tasks.slow_touch, tasks)
+    # two finished, two under way when the signal came, and two given to the workers while it
+    # was on its way (the whole list, 40, when each worker got half of it in one piece)
+    assert len(os.listdir(tmp_path)) <= 6
+
+
+def _gone(pid: int) -> bool:
+    """The process has exited (an orphan adopted by a PID 1 that does not reap stays a zombie)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="reads /proc")
+def test_workers_exit_when_the_main_process_is_killed(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import rocas
+
+    script = ("import executor_tasks, sys\n"
+              "from rocas.search import LocalExecutor\n"
+              "if __name__ == '__main__':\n"
+              "    with LocalExecutor(workers=2) as pool:\n"
+              "        pool.map(executor_tasks.note_pid_and_sleep, [(sys.argv[1], 0.5)] * 100)\n")
+    paths = [str(Path(rocas.__file__).parents[1]), str(Path(executor_tasks.__file__).parent)]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
+    main = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=env)
+    try:
+        _wait_for(lambda: len(os.listdir(tmp_path)) >= 2)
+    finally:
+        main.kill()
+        main.wait()
+    workers = [int(name.removeprefix("pid-")) for name in os.listdir(tmp_path)]
+    # each worker was in the middle of a 0.5 s task (and had 50 to go in its share before)
+    _wait_for(lambda: all(_gone(pid) for pid in workers), timeout_s=3.0)
