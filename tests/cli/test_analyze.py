@@ -236,5 +236,5 @@ def test_the_interrupt_message_says_what_is_on_disk(rocas, monkeypatch, tmp_path
     (run / "state.json").write_text(json.dumps({"done": {"replay": {}}}))
     (run / "physical.ckpt").write_bytes(b"x")
     assert cli.kept_after_interrupt(run, None) == (
-        f"finished phases (replay) and search checkpoints (physical.ckpt) are kept in {run}; "
+        f"finished phases (replay) and checkpoints of the phase under way (physical.ckpt) are kept in {run}; "
         "continue with --resume")
