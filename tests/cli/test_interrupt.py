@@ -13,9 +13,9 @@ import pytest
 from rocas.recording.reader import open_recording
 
 
-def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
-    """Make ``target`` (``module.attr`` or ``module.Class.method``) raise KeyboardInterrupt
-    on call number ``calls + 1``."""
+def _on_call(monkeypatch, target: str, calls: int, action) -> None:
+    """Run ``action()`` on call number ``calls + 1`` of ``target`` (``module.attr`` or
+    ``module.Class.method``) and on every later call, then make the call."""
     owner_path, _, attr = target.rpartition(".")
     owner = pkgutil.resolve_name(owner_path)
     original = getattr(owner, attr)
@@ -24,26 +24,27 @@ def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
     def wrapper(*args, **kwargs):
         seen["n"] += 1
         if seen["n"] > calls:
-            raise KeyboardInterrupt
+            action(seen["n"] - calls)
         return original(*args, **kwargs)
 
     monkeypatch.setattr(owner, attr, wrapper)
+
+
+def _interrupt_after(monkeypatch, target: str, calls: int) -> None:
+    """Make ``target`` raise KeyboardInterrupt on call number ``calls + 1``."""
+    def interrupt(_: int) -> None:
+        raise KeyboardInterrupt
+
+    _on_call(monkeypatch, target, calls, interrupt)
 
 
 def _terminate_after(monkeypatch, target: str, calls: int) -> None:
     """Make ``target`` send SIGTERM to this process on call number ``calls + 1`` (and go on)."""
-    owner_path, _, attr = target.rpartition(".")
-    owner = pkgutil.resolve_name(owner_path)
-    original = getattr(owner, attr)
-    seen = {"n": 0}
-
-    def wrapper(*args, **kwargs):
-        seen["n"] += 1
-        if seen["n"] == calls + 1:
+    def terminate(nth: int) -> None:
+        if nth == 1:
             os.kill(os.getpid(), signal.SIGTERM)
-        return original(*args, **kwargs)
 
-    monkeypatch.setattr(owner, attr, wrapper)
+    _on_call(monkeypatch, target, calls, terminate)
 
 
 class _SigtermNotHandled(Exception):
