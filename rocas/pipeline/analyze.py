@@ -604,6 +604,9 @@ def _phase_cyber(run: _Run, module: str | None) -> dict[str, Any]:
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
     candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals)
+    nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
+    if nearest is not None:
+        result["nearest_fix"] = _cand_json(nearest)
     evaluations = res.evaluations
     if candidates:
         # the search ranks fixes by the size it happened to try; each of the best few is shrunk
@@ -742,15 +745,11 @@ def _first_fix_batch(res: SearchResult, h1_limit: float) -> int | None:
 def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
                     originals: Mapping[str, float] | None = None) -> list[Candidate]:
     """The best ``count`` feasible fixes with distinct parameter sets or directions (up or
-    down from ``originals``): those that keep the ego's earlier trajectory (h1 <= limit) by
-    smallest change (h2); when none keeps it, the one that changes it least."""
+    down from ``originals``): those that keep the ego's earlier trajectory (h1 <= limit), by
+    smallest change (h2). None when no fix keeps it: a configuration that avoids the accident
+    only by driving differently before it is not a fix (:func:`_nearest_fix` records it)."""
     originals = originals or {}
-    feasible = res.feasible
-    if not feasible:
-        return []
-    keep = [c for c in feasible if c.objectives[0] <= h1_limit]
-    if not keep:
-        return [min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))]
+    keep = [c for c in res.feasible if c.objectives[0] <= h1_limit]
     out: list[Candidate] = []
     seen: set[tuple[tuple[str, int], ...]] = set()
     for c in sorted(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names)):
@@ -761,6 +760,15 @@ def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
         if len(out) == count:
             break
     return out
+
+
+def _nearest_fix(res: SearchResult, h1_limit: float) -> Candidate | None:
+    """When every accident-free configuration changes the ego's earlier trajectory beyond
+    ``h1_limit``, the one that changes it least; else None."""
+    feasible = res.feasible
+    if not feasible or any(c.objectives[0] <= h1_limit for c in feasible):
+        return None
+    return min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))
 
 
 def _direction(m: Mutation, originals: Mapping[str, float]) -> tuple[tuple[str, int], ...]:

@@ -87,6 +87,13 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         entity_phrase=entity_phrase, module=module, module_or_none=module or "(none found)",
         params=params or "-", horizon=max(horizon, 0.0),
         scope=f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS")
+    nearest = cyber.get("nearest_fix")
+    if verdict == "no_configuration_fix" and nearest:
+        changes = ", ".join(f"{k} to {_fmt(v)}" for k, v in nearest["mutation"].items())
+        report["explanation"] += (
+            f" The nearest one, {changes}, avoids the accident but changes the ego's trajectory "
+            f"before {max(horizon, 0.0):.1f} s by h1 = {_fmt(nearest['objectives'][0])} m^2, over "
+            f"the limit of {_fmt(state['config']['h1_limit_m2'])} m^2.")
     return report
 
 

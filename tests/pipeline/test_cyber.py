@@ -43,7 +43,7 @@ def test_sensing_limits_may_only_grow():
 
 
 def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory():
-    from rocas.pipeline.analyze import _first_fix, _fix_candidates
+    from rocas.pipeline.analyze import _first_fix, _fix_candidates, _nearest_fix
     from rocas.search.ga import Candidate, SearchResult
 
     def cand(values, h1, h2, ok=True):
@@ -59,9 +59,12 @@ def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory
     assert _fix_candidates(res, 1.0, 3) == [a2, b, pair]
     assert _fix_candidates(res, 1.0, 1) == [a2]
     assert _first_fix(res, 1.0) == 3  # the drifting fix does not count
-    # when no fix keeps the trajectory, the one that changes it least is the only candidate
+    # when no fix keeps the trajectory there is no candidate (no_configuration_fix); the one
+    # that changes it least is recorded as the nearest
     far = SearchResult(candidates=[drift, cand({"planning.e": 1.0}, 3.0, 1.5)], front=[])
-    assert [c.mutation.names for c in _fix_candidates(far, 1.0, 3)] == [("planning.e",)]
+    assert _fix_candidates(far, 1.0, 3) == []
+    assert _nearest_fix(far, 1.0).mutation.names == ("planning.e",)
+    assert _nearest_fix(res, 1.0) is None
     # raising a parameter and lowering it are different fixes when the originals are known
     down = cand({"planning.a": 0.5}, 0.0, 1.22)
     both = SearchResult(candidates=[a1, a2, b, down], front=[])

@@ -42,3 +42,20 @@ def test_the_replay_line_of_a_reproduced_accident():
         "reproduced (emergency at 10.15 s), ego RMSE before the accident 0.035 m"
     # the settings a run directory from before a setting existed used are its defaults
     assert report["settings"]["seed"] == 4 and report["settings"]["budget"] == 240
+
+
+def test_a_fix_that_changes_the_earlier_trajectory_is_named_as_the_nearest_not_as_a_fix():
+    acc = {"kind": "collision", "time_s": 9.0, "other": "obstacle_1"}
+    rep = {"source": "recording", "reproduced": True, "recorded_accident": acc, "accident": acc,
+           "ego_rmse_m": 0.02, "compared_until_s": 9.0}
+    state = _state(rep)
+    state["config"]["h1_limit_m2"] = 1.0
+    state["done"]["cyber"] = {"module": "planning", "scope": "module", "parameters": 42,
+                              "nearest_fix": {"mutation": {"planning.max_accel_mps2": 0.4},
+                                              "objectives": [3.5, 1.2], "constraint": -0.2,
+                                              "generation": 2}}
+    report = build_report(state, Accident("collision", 9.0, "obstacle_1"), "no_configuration_fix")
+    assert report["misconfiguration"] == []
+    assert ("The nearest one, planning.max_accel_mps2 to 0.4, avoids the accident but changes the "
+            "ego's trajectory before 6.0 s by h1 = 3.5 m^2, over the limit of 1 m^2."
+            ) in report["explanation"]
