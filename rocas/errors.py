@@ -45,6 +45,14 @@ class OutputError(RocasError):
     """An output (file, directory, ``.rrd``) cannot be written where it was asked for."""
 
 
+class Terminated(KeyboardInterrupt):
+    """The process was asked to stop (SIGTERM, e.g. from ``timeout`` or a job scheduler).
+
+    A KeyboardInterrupt, so that whatever cleans up after Ctrl-C and says what it kept does
+    the same for it; the CLI raises it from its SIGTERM handler and exits with 143 (128 + 15).
+    """
+
+
 __all__ = [
     "InputError",
     "NotReproducedError",
@@ -52,14 +60,7 @@ __all__ = [
     "RecordingError",
     "RocasError",
     "ScenarioError",
+    "Terminated",
     "TopologyError",
     "UsageError",
 ]
-
-
-class Terminated(KeyboardInterrupt):
-    """The process was asked to stop (SIGTERM, e.g. from ``timeout`` or a job scheduler).
-
-    A KeyboardInterrupt, so that whatever cleans up after Ctrl-C and says what it kept does
-    the same for it; the CLI raises it from its SIGTERM handler and exits with 143 (128 + 15).
-    """
