@@ -125,6 +125,15 @@ class CmgSpec:
         named = self.channels() | ({self.control_channel} if self.control_channel else set())
         return sorted(named - present)
 
+    def missing_channel_warnings(self, topics: Iterable[str], where: str) -> list[str]:
+        """One warning line per channel of :meth:`missing_channels`; ``where`` names the
+        recording(s) (the channels are ignored, which is what the line says)."""
+        return [
+            f"{self.path} names {'control channel' if t == self.control_channel else 'channel'} "
+            f"{t}, which is not in {where}; ignored"
+            for t in self.missing_channels(topics)
+        ]
+
 
 def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
     """Read and validate a CMG JSON file."""
@@ -323,10 +332,12 @@ def _dot_quote(text: str) -> str:
     return f'"{text}"'
 
 
-NO_TOPOLOGY_HINT = (
-    "pass --cmg FILE with the module graph, or add the metadata with "
-    "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'"
-)
+def no_topology_hint(start: str = "") -> str:
+    """What to do about a recording without topology; ``start`` says where a graph could
+    come from."""
+    graph = f"the module graph ({start})" if start else "the module graph"
+    return (f"pass --cmg FILE with {graph}, or add the metadata with "
+            "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'")
 
 
 def declares_topology(channels: Iterable[ChannelInfo]) -> bool:
@@ -350,7 +361,7 @@ def build_cmg(
         raise TopologyError(
             f"no channel topology in {where} (no channel has rocas.writers, "
             "rocas.readers or callerid metadata)",
-            NO_TOPOLOGY_HINT,
+            no_topology_hint(),
         )
     return graph
 

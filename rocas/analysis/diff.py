@@ -17,6 +17,7 @@ from rocas.analysis.cmg import (
     control_channel,
     declares_topology,
     load_cmg,
+    no_topology_hint,
 )
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module
@@ -166,15 +167,16 @@ def _channels_for_topology(
     """
     topics_a = {c.topic for c in acc}
     topics_b = {c.topic for c in ref}
+    both = acc + [c for c in ref if c.topic not in topics_a]
     if declares_topology(acc) or not declares_topology(ref):
-        return acc + [c for c in ref if c.topic not in topics_a], ()
+        return both, ()
     if topics_a == topics_b:
         return ref, (
             f"{accident} declares no channel topology; using the one {reference} declares "
             "(the two recordings have the same channels)",
         )
     if has_cmg:  # the file supplies what it names; the rest as usual
-        return acc + [c for c in ref if c.topic not in topics_a], ()
+        return both, ()
     only = [
         f"only in the {role}: {', '.join(sorted(topics))}"
         for role, topics in (("accident", topics_a - topics_b), ("reference", topics_b - topics_a))
@@ -183,9 +185,8 @@ def _channels_for_topology(
     raise TopologyError(
         f"{accident} declares no channel topology, and the one {reference} declares does not "
         f"apply to it because their channels differ ({'; '.join(only)})",
-        f"pass --cmg FILE with the module graph ('rocas cmg {reference} --format json' prints "
-        "the reference's in that format, to complete), or add the metadata with "
-        "'rocas annotate IN.mcap --cmg FILE -o OUT.mcap'",
+        no_topology_hint(f"'rocas cmg {reference} --format json' prints the reference's in "
+                         "that format, to complete"),
     )
 
 
@@ -261,13 +262,10 @@ def diff(
         has_cmg=spec is not None,
     )
     both = f"{accident} or {reference}"
-    cmg_warnings = []
+    cmg_warnings: list[str] = []
     if spec is not None:
         recorded = {c.topic for c in channel_infos}
-        for topic in spec.missing_channels(recorded):
-            what = "control channel" if topic == spec.control_channel else "channel"
-            cmg_warnings.append(f"{spec.path} names {what} {topic}, which is not in {both}; "
-                                "ignored")
+        cmg_warnings = spec.missing_channel_warnings(recorded, both)
         spec = spec.restricted_to(recorded)
     graph = build_cmg(channel_infos, spec, where=both)
     ctrl = control_channel(graph, control_channel_topic, spec, where=both)

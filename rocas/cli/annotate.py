@@ -46,10 +46,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
     annotations = {}
     control = args.control_channel
     if spec is not None:
-        for topic in spec.missing_channels(topics):
-            what = "control channel" if topic == spec.control_channel else "channel"
-            env.warn(f"{spec.path} names {what} {topic}, which is not in {args.recording}; "
-                     "ignored")
+        for line in spec.missing_channel_warnings(topics, args.recording):
+            env.warn(line)
         annotations = {t: a for t, a in spec.annotations().items() if t in topics}
         if control is None and spec.control_channel in topics:
             control = spec.control_channel

@@ -87,11 +87,9 @@ def build_view(
     for ch in infos:
         by_topic.setdefault(ch.topic, []).append(ch)
     if spec is not None:
-        for topic in spec.missing_channels(by_topic):
-            if env is not None:
-                what = "control channel" if topic == spec.control_channel else "channel"
-                env.warn(f"{spec.path} names {what} {topic}, which is not in {recording}; "
-                         "ignored")
+        if env is not None:
+            for line in spec.missing_channel_warnings(by_topic, recording):
+                env.warn(line)
         if spec.control_channel and spec.control_channel not in by_topic:
             spec = dataclasses.replace(spec, control_channel=None)
     if override is not None and override not in by_topic:

@@ -39,8 +39,8 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
 
-from rocas._fs import atomic_path
-from rocas.errors import RecordingError, TopologyError, UsageError
+from rocas._fs import atomic_path, refuse_overwriting
+from rocas.errors import RecordingError, TopologyError
 from rocas.recording.reader import MAGIC, ChannelInfo, open_recording
 from rocas.recording.topology import (
     CONTROL_ROLE,
@@ -361,11 +361,7 @@ def annotate_recording(
     """
     src, dst = Path(source), Path(output)
     rec = open_recording(src)  # the uniform checks: exists, is a file, is MCAP
-    if dst.exists() and dst.resolve() == src.resolve():
-        raise UsageError(
-            f"the output {dst} is the input recording",
-            "write the annotated copy to another file with -o",
-        )
+    refuse_overwriting(src, dst)
     chunk_size = _chunk_size(src)
     with atomic_path(dst) as tmp, open(tmp, "wb") as out, open(rec.path, "rb") as f:
         copier = _Copier(out, annotations, control_channel, chunk_size)
