@@ -198,7 +198,13 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rich.panel import Panel
     from rich.table import Table
 
-    from rocas.pipeline.report import change, replay_text, robust_text, settings_text
+    from rocas.pipeline.report import (
+        accident_text,
+        change,
+        replay_text,
+        robust_text,
+        settings_text,
+    )
 
     con = env.out()
     t = Table(show_header=False, box=None, padding=(0, 1))
@@ -209,8 +215,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     if report.get("replay"):
         t.add_row("replay", replay_text(report))
     if acc:
-        t.add_row("accident", f"{acc['kind']}" + (f" with {acc['other']}" if acc["other"] else "")
-                  + f" at {acc['time_s']:.2f} s")
+        t.add_row("accident", accident_text(acc))
     trig = report["triggering_entity"]
     if trig:
         for p in trig["properties"]:

@@ -108,7 +108,8 @@ def _nothing_recorded(replay: dict[str, Any], accident: Any) -> bool:
     return bool(replay.get("reproduced")) and accident is None
 
 
-def _accident_text(acc: dict[str, Any] | None) -> str:
+def accident_text(acc: dict[str, Any] | None) -> str:
+    """An accident as the report words it: "collision with obstacle_1 at 8.10 s"."""
     if not acc:
         return "no accident"
     other = f" with {acc['other']}" if acc.get("other") else ""
@@ -121,22 +122,22 @@ def replay_text(report: dict[str, Any]) -> str:
     against the recording (the terminal's and report.md's replay line)."""
     rep = report.get("replay") or {}
     if rep.get("source") == "scenario":
-        return f"simulated scenario ({_accident_text(rep.get('accident'))})"
+        return f"simulated scenario ({accident_text(rep.get('accident'))})"
     rmse = rep.get("ego_rmse_m")
     if "recorded_accident" not in rep:  # a run directory from before these figures were kept
         acc = report.get("accident")
         text = ("reproduced" if rep.get("reproduced") else "not reproduced") + \
-            (f" ({_accident_text(acc)})" if acc else "")
+            (f" ({accident_text(acc)})" if acc else "")
         return text + (f", ego RMSE {rmse:.3f} m" if rmse is not None else "")
     recorded, replayed = rep["recorded_accident"], rep.get("accident")
     if recorded is None:
         text = "the recording holds no accident" + \
-            (", nor does its replay" if replayed is None else f"; the replay has {_accident_text(replayed)}")
+            (", nor does its replay" if replayed is None else f"; the replay has {accident_text(replayed)}")
         return text + f", ego RMSE over the whole run {rmse:.3f} m"
     if rep.get("reproduced"):
-        text = f"reproduced ({_accident_text(replayed)})"
+        text = f"reproduced ({accident_text(replayed)})"
     else:
-        text = f"not reproduced (recorded {_accident_text(recorded)}, replay {_accident_text(replayed)})"
+        text = f"not reproduced (recorded {accident_text(recorded)}, replay {accident_text(replayed)})"
     return text + f", ego RMSE before the accident {rmse:.3f} m"
 
 
@@ -185,10 +186,8 @@ def markdown(report: dict[str, Any]) -> str:
         lines.append(f"- **Settings**: {settings_text(report)}")
     if report.get("replay"):
         lines.append(f"- **Replay**: {replay_text(report)}")
-    acc = report["accident"]
-    if acc:
-        other = f" with {acc['other']}" if acc.get("other") else ""
-        lines.append(f"- **Accident**: {acc['kind']}{other} at {acc['time_s']:.2f} s")
+    if report["accident"]:
+        lines.append(f"- **Accident**: {accident_text(report['accident'])}")
     trig = report["triggering_entity"]
     if trig:
         for p in trig["properties"]:
