@@ -34,6 +34,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import operator
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -151,6 +152,7 @@ class _TooLate(Exception):
         super().__init__(window_s)
         self.window_s = window_s
 
+
 def compute_series(
     accident: Recording,
     reference: Recording,
@@ -262,8 +264,8 @@ def _one_pass(
         nonlocal scored_below
         for b in sorted(k for k in open_bins if k < below):
             for topic, (xs, ys) in open_bins.pop(b).items():
-                xs.sort(key=_entry_order)
-                ys.sort(key=_entry_order)
+                xs.sort(key=_LOG_TIME_THEN_ARRIVAL)
+                ys.sort(key=_LOG_TIME_THEN_ARRIVAL)
                 acc.setdefault(topic, _Acc()).add_bin(
                     b, [x[2] for x in xs], [y[2] for y in ys], tolerance, adjacent_pairing)
         scored_below = max(scored_below, below)
@@ -324,8 +326,8 @@ def _one_pass(
     )
 
 
-def _entry_order(entry: tuple[int, int, Any]) -> tuple[int, int]:
-    return entry[0], entry[1]
+#: the order of a bin's entries (log time, arrival, message): the message is never compared
+_LOG_TIME_THEN_ARRIVAL = operator.itemgetter(0, 1)
 
 
 def _schema_label(info: ChannelInfo) -> str:
