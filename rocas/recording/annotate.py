@@ -41,7 +41,7 @@ from mcap.writer import Writer as McapWriter
 
 from rocas._fs import atomic_path, refuse_overwriting
 from rocas.errors import RecordingError, TopologyError
-from rocas.recording.reader import MAGIC, ChannelInfo, open_recording
+from rocas.recording.reader import MAGIC, ChannelInfo, describe_error, open_recording
 from rocas.recording.topology import (
     CONTROL_ROLE,
     READERS_KEY,
@@ -329,9 +329,7 @@ def _damage(exc: BaseException, done: int, size: int, copying: bool, at_end: boo
                 f"starts at byte {done}")
     if copying and isinstance(exc, EndOfFile):
         return f"is damaged: a record inside the chunk at byte {done} ends early"
-    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-    what = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-    return f"is damaged or truncated ({what})"
+    return f"is damaged or truncated ({describe_error(exc)})"
 
 
 def annotate_recording(

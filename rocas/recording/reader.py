@@ -385,7 +385,7 @@ class Recording:
                 records = _chunk_records(data)
                 del data
             except Exception as exc:  # any parse failure inside one chunk: skip the chunk
-                raise _BadRecord(offset, _describe(exc)) from exc
+                raise _BadRecord(offset, describe_error(exc)) from exc
             for rec in records:
                 if isinstance(rec, Schema):
                     self._register_schema(rec)
@@ -412,7 +412,7 @@ class Recording:
             else:
                 return  # other opcodes (header, indexes, unknown) carry nothing we need
         except (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError) as exc:
-            reason = f"unreadable record at offset {offset}: {_describe(exc)}"
+            reason = f"unreadable record at offset {offset}: {describe_error(exc)}"
             raise _BadRecord(offset, reason) from exc
         yield rec
 
@@ -452,7 +452,7 @@ class Recording:
             except Exception as exc:  # a foreign file can hold anything
                 st.undecodable += 1
                 if st.first_error is None:
-                    st.first_error = _describe(exc)
+                    st.first_error = describe_error(exc)
                 continue
             st.decoded += 1
             yield DecodedMessage(ch, raw.log_time_ns, raw.publish_time_ns, raw.sequence, obj)
@@ -648,7 +648,8 @@ def _amount(n: int) -> str:
     return f"{n >> 20} MiB" if n >= 1 << 20 and n % (1 << 20) == 0 else f"{n} bytes"
 
 
-def _describe(exc: BaseException) -> str:
+def describe_error(exc: BaseException) -> str:
+    """An exception in one line: its type, and the first line of its text if it has one."""
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
