@@ -101,8 +101,11 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
     pose_rows: list[tuple[float, ...]] = []
     lanes: list[str] = []
     frames: list[tuple[float, Any, tuple[float, float, float] | None]] = []
+    checked: set[int] = set()  # channel ids whose type has been checked
     for m in rec.decoded({TOPIC_POSE, TOPIC_OBSTACLES}):
-        _check_type(path, m.channel)
+        if m.channel.id not in checked:
+            _check_type(path, m.channel)
+            checked.add(m.channel.id)
         t = m.log_time_ns * _NS
         msg = m.message
         if m.channel.topic == TOPIC_POSE:
