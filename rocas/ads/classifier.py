@@ -16,6 +16,7 @@ from io import BytesIO
 
 import numpy as np
 
+from rocas import numerics
 from rocas.sim.geometry import clip
 
 CAMERA_COLUMNS = 16
@@ -49,8 +50,8 @@ def camera_view(
         features (N, FEATURES): per column [size, r, g, b], columns left to right.
     """
     d = np.maximum(dist, 0.5)
-    half_angle = np.arctan2(lat_extent, d)
-    contrast = np.exp(-(fog[:, None] / 100.0) * d / FOG_CONTRAST_LENGTH_M) * visible
+    half_angle = numerics.arctan2(lat_extent, d)
+    contrast = numerics.exp(-(fog[:, None] / 100.0) * d / FOG_CONTRAST_LENGTH_M) * visible
     size = clip(height / d * 3.0, 0.0, 1.0) * contrast  # (N, M)
     covers = np.abs(bearing[..., None] - COLUMN_CENTERS) <= half_angle[..., None] \
         + COLUMN_HALF_WIDTH  # (N, M, C)
@@ -69,11 +70,11 @@ def camera_view(
 
 def mlp_forward(weights: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
     """Brake probability (N,) from features (N, FEATURES)."""
-    # row-wise products (a stack of (1, F) @ (F, H) matmuls): each variant's result is computed
-    # by the same kernel whatever the batch size, so it is bit-identical across batch sizes
-    h = np.tanh(np.matmul(x[:, None, :], weights["w1"])[:, 0, :] + weights["b1"])
-    z = np.matmul(h[:, None, :], weights["w2"])[:, 0, 0] + weights["b2"][0]
-    return 1.0 / (1.0 + np.exp(-z))
+    # no BLAS: numerics.rowdot sums each row in a fixed order, so a variant's probability is
+    # bit-identical whatever the batch size, the BLAS kernel or the CPU
+    h = numerics.tanh(numerics.rowdot(x, weights["w1"]) + weights["b1"])
+    z = numerics.rowdot(h, weights["w2"])[:, 0] + weights["b2"][0]
+    return numerics.sigmoid(z)
 
 
 @functools.cache

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.ads.localization import ChassisOutput, LocalizationOutput
 from rocas.ads.planning import PlanningOutput
 from rocas.sim.geometry import clip, wrap_angle
@@ -99,12 +100,12 @@ class Control:
                           p["pure_pursuit_lookahead_gain_s"] * speed)
         s_rows = np.where(plan.valid, plan.s, plan.s[:, -1:] + 1e3 + plan.t)
         tx, ty = _interp_rows(s_match + look, s_rows, plan.x, plan.y)
-        alpha = wrap_angle(np.arctan2(ty - loc.y, tx - loc.x) - loc.heading)
-        delta_pp = np.arctan2(2.0 * wb * np.sin(alpha), look)
+        alpha = wrap_angle(numerics.arctan2(ty - loc.y, tx - loc.x) - loc.heading)
+        delta_pp = numerics.arctan2(2.0 * wb * np.sin(alpha), look)
         kappa = plan.kappa[r, i]
-        delta_st = -heading_err - np.arctan2(p["stanley_gain"] * lateral,
+        delta_st = -heading_err - numerics.arctan2(p["stanley_gain"] * lateral,
                                              speed + p["stanley_softening_mps"]) \
-            + p["curvature_feedforward_gain"] * np.arctan(wb * kappa)
+            + p["curvature_feedforward_gain"] * numerics.arctan(wb * kappa)
         delta = np.where(p["lateral_controller"] >= 0.5, delta_st, delta_pp)
         target = clip(delta / p["max_steer_angle_rad"] * 100.0, -100.0, 100.0)
         max_step = p["steering_rate_limit_pct_s"] * dt

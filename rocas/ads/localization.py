@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.scenarios.model import EGO_WHEELBASE_M
 from rocas.sim import rng
 from rocas.sim.dynamics import VehicleState
@@ -119,13 +120,13 @@ class Canbus:
         self.throttle, self.brake, self.steering_pct, self.estop = (
             throttle, brake, steering_pct, estop)
         target = throttle / 100.0 * self.max_accel - brake / 100.0 * self.max_decel
-        k = 1.0 - np.exp(-dt / self.tau)
+        k = 1.0 - numerics.exp(-dt / self.tau)
         self.accel = self.accel + (target - self.accel) * k
         target_angle = clip(steering_pct, -100.0, 100.0) / 100.0 * self.max_steer
         step = clip((target_angle - self.wheel_angle) * k, -self.steer_rate * dt,
                        self.steer_rate * dt)
         self.wheel_angle = self.wheel_angle + step
-        return self.accel, np.tan(self.wheel_angle) / EGO_WHEELBASE_M
+        return self.accel, numerics.tan(self.wheel_angle) / EGO_WHEELBASE_M
 
     def advance_odometer(self, distance: np.ndarray) -> None:
         self.odometer = self.odometer + distance

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.ads import classifier
 from rocas.ads.localization import LocalizationOutput
 from rocas.sim import rng
@@ -173,7 +174,7 @@ class Perception:
         rx = dxw * ce + dyw * se
         ry = -dxw * se + dyw * ce
         dist = np.hypot(rx, ry)
-        bearing = np.arctan2(ry, rx)
+        bearing = numerics.arctan2(ry, rx)
         factor, glare, weather_factor = self._range_factor(ego_yaw)
         vru = (gt.kind == KIND_CYCLIST) | (gt.kind == KIND_PEDESTRIAN)
         static_obj = (gt.kind == KIND_CONE) | (gt.kind == KIND_BOX)
@@ -239,7 +240,7 @@ class Perception:
         # heading: resolve the pi ambiguity with the velocity when fast, else with the track
         speed = np.hypot(self.tvx, self.tvy)
         ref_dir = np.where(speed > p["heading_from_velocity_speed_mps"][:, None],
-                           np.arctan2(self.tvy, self.tvx), self.theading)
+                           numerics.arctan2(self.tvy, self.tvx), self.theading)
         flip = np.abs(wrap_angle(box_yaw - ref_dir)) > np.pi / 2
         resolved = wrap_angle(box_yaw + np.where(flip, np.pi, 0.0))
         first = new & (self.hits == 1)
@@ -306,7 +307,7 @@ class Perception:
         dist = np.hypot(rx, ry)
         facing = np.abs(wrap_angle(w.light_facing - (eyaw[:, None] + np.pi))) \
             <= np.deg2rad(p["tl_facing_tolerance_deg"])[:, None]
-        in_view = (rx > 0) & (np.abs(np.arctan2(ry, rx))
+        in_view = (rx > 0) & (np.abs(numerics.arctan2(ry, rx))
                               <= np.deg2rad(p["tl_fov_deg"])[:, None] / 2)
         detected = (dist <= p["tl_max_range_m"][:, None]) & facing & in_view
         vis = weather_factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.ads.localization import ChassisOutput, LocalizationOutput
 from rocas.ads.perception import (
     T_BICYCLE,
@@ -172,7 +173,7 @@ class Planning:
         lat_gap = np.abs(lo - d_obs) - (hw_e + lat_ext + buf_vru)
         ahead_now = so - lon_ext > s0[:, None]
         in_path_now = consider & (lat_gap < c("lateral_safety_buffer_m")) & ahead_now
-        dir_rel = np.abs(wrap_angle(np.arctan2(pred.vy, pred.vx) - ref_h))
+        dir_rel = np.abs(wrap_angle(numerics.arctan2(pred.vy, pred.vx) - ref_h))
         aligned = dir_rel < np.pi / 4
         moving_vru = vru & ~pred.is_static
         follow = in_path_now & ~pred.is_static & (aligned | moving_vru)
@@ -276,7 +277,7 @@ class Planning:
                               axis=1)
         reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
         amax, bcomf = p["max_accel_mps2"], p["comfort_decel_mps2"]
-        a_free = amax * (1.0 - (v0 / np.maximum(v_cruise, 0.1)) ** p["idm_exponent"])
+        a_free = amax * (1.0 - numerics.power(v0 / np.maximum(v_cruise, 0.1), p["idm_exponent"]))
         headway = np.where(reasons == R_YIELD, c("yield_time_headway_s"), c("follow_time_headway_s"))
         sstar = smin + np.maximum(0.0, v0[:, None] * headway + v0[:, None]
                                   * (v0[:, None] - leads) / (2.0 * np.sqrt(amax * bcomf))[:, None])
@@ -405,7 +406,7 @@ class Planning:
                     t: np.ndarray, offset_at) -> tuple[np.ndarray, ...]:  # noqa: ANN001
         road = self.world.road
         a = a_cmd[:, None]
-        v_acc = v0[:, None] + a * ACCEL_DECAY_S * (1.0 - np.exp(-t / ACCEL_DECAY_S))
+        v_acc = v0[:, None] + a * ACCEL_DECAY_S * (1.0 - numerics.exp(-t / ACCEL_DECAY_S))
         v_dec = v0[:, None] + a * t
         v = clip(np.where(a > 0, v_acc, v_dec), 0.0, vcap[:, None])
         dt = np.diff(t, axis=1)
@@ -417,7 +418,7 @@ class Planning:
         x = rx - d * np.sin(rh)
         y = ry + d * np.cos(rh)
         dd = np.gradient(d, axis=1) / np.maximum(np.gradient(s, axis=1), 1e-3)
-        th = wrap_angle(rh + np.arctan(dd))
+        th = wrap_angle(rh + numerics.arctan(dd))
         return x, y, th, rk, s, v, acc
 
 

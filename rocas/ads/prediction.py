@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.ads.localization import LocalizationOutput
 from rocas.ads.perception import (
     T_BICYCLE,
@@ -101,7 +102,7 @@ class Prediction:
         k = np.arange(1, MAX_POINTS + 1)
         t = k[None, :] * p["time_step_s"][:, None]  # (N, K)
         valid = t <= p["horizon_s"][:, None] + 1e-9
-        dir_ = np.where(speed > 0.05, np.arctan2(vy, vx), heading)
+        dir_ = np.where(speed > 0.05, numerics.arctan2(vy, vx), heading)
         # lane matching and intents, for every slot
         q, d2 = nearest_on(road.lane_grid, x, y)
         q = np.minimum(q, road.lane_points.shape[0] - 1)
@@ -162,7 +163,7 @@ class Prediction:
         tt = t[:, None, :]
         vmax = np.where(ped, p["pedestrian_max_speed_mps"][:, None], p["max_speed_mps"][:, None])
         v0 = np.minimum(speed, vmax)
-        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - np.exp(-tt / tau)), 0.0,
+        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - numerics.exp(-tt / tau)), 0.0,
                    vmax[..., None])
         dt_k = p["time_step_s"][:, None, None]
         dist_k = np.cumsum(0.5 * (v_k + np.concatenate([v0[..., None], v_k[..., :-1]], -1))
@@ -185,7 +186,7 @@ class Prediction:
         offy = y - road.lane_points[q, 1]
         lat0 = -offx * np.sin(lane_h) + offy * np.cos(lane_h)
         # vehicles converge to the lane centre; cyclists keep their offset (they ride the edge)
-        lat = lat0[..., None] * np.where(bike[..., None], 1.0, np.exp(
+        lat = lat0[..., None] * np.where(bike[..., None], 1.0, numerics.exp(
             -tt / p["lane_follow_convergence_s"][:, None, None]))
         lf_x = p0[..., 0] + u * (p1[..., 0] - p0[..., 0]) - lat * np.sin(lf_h)
         lf_y = p0[..., 1] + u * (p1[..., 1] - p0[..., 1]) + lat * np.cos(lf_h)
@@ -193,7 +194,7 @@ class Prediction:
         lat_v = p["cyclist_cut_in_lateral_speed_mps"][:, None] * -np.sign(rel_y)
         ci_x = cv_x + (-ls * lat_v)[..., None] * tt
         ci_y = cv_y + (lc * lat_v)[..., None] * tt
-        ci_h = np.arctan2(sdir * speed[..., None] + (lc * lat_v)[..., None],
+        ci_h = numerics.arctan2(sdir * speed[..., None] + (lc * lat_v)[..., None],
                           cdir * speed[..., None] - (ls * lat_v)[..., None])
         sel_lf = (intent == INTENT_LANE_FOLLOW)[..., None]
         sel_ci = (intent == INTENT_CUT_IN)[..., None]

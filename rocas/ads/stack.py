@@ -7,6 +7,7 @@ runs every step on the latest plan; canbus turns the command into actuation.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,6 +71,13 @@ class AdsStack:
         return self.canbus.actuate(ctrl.throttle, ctrl.brake, ctrl.steering_target, ctrl.estop)
 
 
+@functools.cache
+def _digest_weights(count: int) -> np.ndarray:
+    """1.0001**i for i < count, by repeated multiplication (``**`` would go through a SIMD
+    ``power`` kernel whose last bit depends on the CPU)."""
+    return np.cumprod(np.concatenate([[1.0], np.full(max(count - 1, 0), 1.0001)]))[:count]
+
+
 def output_digest(out: TickOutputs) -> dict[str, np.ndarray]:
     """A per-variant fingerprint (N,) of what each module published this step; summed over a
     run it shows whether a parameter changed a module's output."""
@@ -78,8 +86,8 @@ def output_digest(out: TickOutputs) -> dict[str, np.ndarray]:
         for name in names:
             a = np.asarray(getattr(obj, name), dtype=np.float64)
             a = np.where(np.isfinite(a), a, 0.0)
-            total = total + (a.reshape(a.shape[0], -1) * 1.0001 ** np.arange(
-                a.reshape(a.shape[0], -1).shape[1])).sum(axis=1)
+            flat = a.reshape(a.shape[0], -1)
+            total = total + (flat * _digest_weights(flat.shape[1])).sum(axis=1)
         return total
 
     d = {

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from rocas import numerics
 from rocas._fs import check_writable, is_temporary, write_text_atomic
 from rocas.errors import InputError, OutputError, ScenarioError, UsageError
 from rocas.pipeline.cyber import cyber_space
@@ -447,7 +448,7 @@ def _phase_physical(run: _Run) -> dict[str, Any]:
     positions = entity_positions(scn, orig.actors_xy[min(tick, len(orig.actors_xy) - 1)])
     ego_xy = tuple(orig.ego_xy[tick])
     prev = orig.ego_xy[max(tick - 1, 0)]
-    heading = float(np.arctan2(ego_xy[1] - prev[1], ego_xy[0] - prev[0])) if tick else 0.0
+    heading = float(numerics.arctan2(ego_xy[1] - prev[1], ego_xy[0] - prev[0])) if tick else 0.0
     actor_ids = [a.id for a in scn.actors]
     upto = tick + 1
 

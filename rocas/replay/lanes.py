@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas import numerics
 from rocas.replay.frames import wrap
 from rocas.scenarios.model import Lane
 
@@ -28,7 +29,7 @@ def project(points: np.ndarray, p: np.ndarray) -> tuple[float, float, float]:
     q = a + u[:, None] * d
     dist = np.hypot(*(p - q).T)
     i = int(np.argmin(dist))
-    h = float(np.arctan2(d[i, 1], d[i, 0]))
+    h = float(numerics.arctan2(d[i, 1], d[i, 0]))
     side = -np.sin(h) * (p[0] - q[i, 0]) + np.cos(h) * (p[1] - q[i, 1])
     lat = float(np.copysign(dist[i], side))  # true distance (a clamped end is not "beside")
     return float(arc_length(points)[i] + u[i] * np.sqrt(ll[i])), lat, h
@@ -53,7 +54,7 @@ def _offset(points: np.ndarray, lateral_m: float) -> np.ndarray:
     if len(points) < 2 or lateral_m == 0.0:
         return points
     g = np.gradient(points, axis=0)
-    h = np.arctan2(g[:, 1], g[:, 0])
+    h = numerics.arctan2(g[:, 1], g[:, 0])
     return points + lateral_m * np.stack([-np.sin(h), np.cos(h)], -1)
 
 

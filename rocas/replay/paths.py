@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas import numerics
 from rocas.replay.lanes import arc_length as _arc
 from rocas.replay.lanes import walk_lanes
 from rocas.replay.tracks import Track
@@ -153,7 +154,7 @@ def _pursue(path: np.ndarray, ds: float, s_t: np.ndarray, dt_s: float) -> np.nda
     s0 = float(s_t[0])
     pos = at(s0)
     d = at(s0 + 0.5) - at(max(s0 - 0.5, 0.0))
-    course = float(np.arctan2(d[1], d[0]))
+    course = float(numerics.arctan2(d[1], d[0]))
     idx = int(round(s0 / ds))
     out = np.empty((len(s_t), 2))
     out[0] = pos
@@ -194,7 +195,7 @@ def _pursuit_compensated(path: np.ndarray, t_all: np.ndarray, s_all: np.ndarray,
         s_run = _progress(target, run)
         i = np.clip(np.round(s_run / ds).astype(np.int64), 0, n - 1)
         err = ((run - target[i]) * normal[i]).sum(1)
-        order = np.argsort(s_run)
+        order = np.argsort(s_run, kind="stable")
         e = np.interp(arc, s_run[order], err[order], left=0.0, right=0.0)
         # only the smooth part: the pursuer rides over the track's noise, which must not be
         # fed back (it would make the steered path zigzag, longer than the one driven)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.replay.frames import wrap
 from rocas.replay.lanes import arc_length, forward_branches, project
 from rocas.replay.source import (
@@ -91,7 +92,7 @@ class Track:
         assert pa is not None and pb is not None
         d = pb - pa
         speed = float(np.hypot(*d)) / max(t_b - t_a, 1e-9)
-        heading = float(np.arctan2(d[1], d[0])) if speed > 0.2 else self.heading_at(t_a)
+        heading = float(numerics.arctan2(d[1], d[0])) if speed > 0.2 else self.heading_at(t_a)
         return speed, heading
 
     @property
@@ -196,7 +197,7 @@ def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
                 continue
             if branches is None:
                 va = float(np.hypot(*d.velocity[ra]))
-                h = float(np.arctan2(d.velocity[ra, 1], d.velocity[ra, 0])) \
+                h = float(numerics.arctan2(d.velocity[ra, 1], d.velocity[ra, 0])) \
                     if va > MOVING_SPEED_MPS else float(d.heading[ra])
                 branches = forward_branches(lanes, d.xy[ra], h,
                                             (1.6 * va + 3.0) * MAX_REIDENTIFY_S)
@@ -247,7 +248,7 @@ def smooth(times: np.ndarray, values: np.ndarray, sigma_s: float = SMOOTH_SIGMA_
     if n < 3 or sigma_s <= 0:
         return values.copy()
     dt = times[None, :] - times[:, None]                      # (n, n): sample j relative to i
-    w = np.exp(-0.5 * (dt / sigma_s) ** 2) * (np.abs(dt) <= 3 * sigma_s)
+    w = numerics.exp(-0.5 * (dt / sigma_s) ** 2) * (np.abs(dt) <= 3 * sigma_s)
     s0 = w.sum(1)
     s1 = (w * dt).sum(1)
     s2 = (w * dt * dt).sum(1)
@@ -256,7 +257,8 @@ def smooth(times: np.ndarray, values: np.ndarray, sigma_s: float = SMOOTH_SIGMA_
     lw = w * (s2[:, None] - s1[:, None] * dt) / np.where(np.abs(det) > 1e-12, det, np.inf)[:, None]
     flat = np.abs(det) <= 1e-12
     lw[flat] = w[flat] / s0[flat, None]
-    return lw @ values
+    # no BLAS (its kernel would change the sum's order): one fixed-order row sum per column
+    return np.stack([(lw * values[:, d]).sum(axis=1) for d in range(values.shape[1])], axis=1)
 
 
 def _classify(d: Detections, rows: np.ndarray) -> tuple[str, str, str, np.ndarray, list[str]]:
@@ -343,17 +345,17 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = ()) -
             xy = np.repeat(centre[None], len(grid), 0)
             speed = np.zeros(len(grid))
             h2 = 2.0 * d.heading[rows]
-            heading = np.full(len(grid), 0.5 * np.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
+            heading = np.full(len(grid), 0.5 * numerics.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
         else:
             xy = smooth(grid, xy)
             vel = np.gradient(xy, grid, axis=0)
             speed = np.hypot(vel[:, 0], vel[:, 1])
-            heading = np.where(speed > MOVING_SPEED_MPS, np.arctan2(vel[:, 1], vel[:, 0]),
+            heading = np.where(speed > MOVING_SPEED_MPS, numerics.arctan2(vel[:, 1], vel[:, 0]),
                                perceived)
             # the box orientation, its pi ambiguity resolved toward the direction of travel
             # (a slow vehicle's: its overall displacement)
             travel = xy[-1] - xy[0]
-            ref = np.where(speed > MOVING_SPEED_MPS, heading, np.arctan2(travel[1], travel[0])
+            ref = np.where(speed > MOVING_SPEED_MPS, heading, numerics.arctan2(travel[1], travel[0])
                            if np.hypot(*travel) > 0.5 else perceived)
             body = np.where(np.isnan(perceived), ref, perceived)
             body = np.where(np.cos(body - ref) < 0.0, body + np.pi, body)

@@ -145,6 +145,7 @@ def run_search(
     from pymoo.termination import get_termination
 
     from rocas.search._problem import SearchProblem
+    from rocas.search._survival import StableRankAndCrowding, quantize
 
     ckpt = Path(checkpoint) if checkpoint else None
     if ckpt is not None and ckpt.exists():
@@ -155,7 +156,8 @@ def run_search(
         sampling = _initial_population(space, cfg)
         if cfg.screen:
             sampling = _screen(space, evaluate, cfg, state, on_generation)
-        algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True)
+        algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True,
+                          survival=StableRankAndCrowding())
         algorithm.setup(problem, termination=get_termination("n_gen", cfg.generations),
                         seed=cfg.seed, verbose=False)
         state.algorithm = algorithm
@@ -164,7 +166,8 @@ def run_search(
     while algo.has_next():
         gen = algo.n_gen if algo.n_gen is not None else 1
         pop = algo.ask()
-        genomes = pop.get("X")
+        genomes = quantize(pop.get("X"))
+        pop.set("X", genomes)
         mutations = [space.decode(g) for g in genomes]
         todo = list(dict.fromkeys(m for m in mutations if m not in state.cache))
         for m, ev in zip(todo, evaluate(todo), strict=True):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.sim.dynamics import (
     LATERAL_GRIP_FACTOR,
     VehicleState,
@@ -50,7 +51,7 @@ def trail_body(gx: np.ndarray, gy: np.ndarray, rear_x: np.ndarray, rear_y: np.nd
     was at (rear_x, rear_y): the rear axle is dragged toward the front one (the body turns to
     point from it to the front axle). Points (wheelbase 0) keep ``yaw_prev``."""
     dx, dy = gx - rear_x, gy - rear_y
-    yaw = np.where((wheelbase > 0) & (np.hypot(dx, dy) > 1e-6), np.arctan2(dy, dx), yaw_prev)
+    yaw = np.where((wheelbase > 0) & (np.hypot(dx, dy) > 1e-6), numerics.arctan2(dy, dx), yaw_prev)
     return gx - ahead * np.cos(yaw), gy - ahead * np.sin(yaw), yaw
 
 
@@ -63,7 +64,7 @@ def pursuit_curvature(x: np.ndarray, y: np.ndarray, yaw: np.ndarray, tx: np.ndar
                       ty: np.ndarray) -> np.ndarray:
     """Curvature [1/m] pure pursuit steers from pose (x, y, yaw) towards target (tx, ty)
     (any matching shapes)."""
-    alpha = wrap_angle(np.arctan2(ty - y, tx - x) - yaw)
+    alpha = wrap_angle(numerics.arctan2(ty - y, tx - x) - yaw)
     return 2.0 * np.sin(alpha) / np.maximum(np.hypot(tx - x, ty - y), 1.0)
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas import numerics
 from rocas.sim.geometry import clip, wrap_angle
 
 GRAVITY_MPS2 = 9.81
@@ -70,7 +71,7 @@ def bicycle_step(
     course = state.course + v_mid * kappa_eff * dt
     slip = wrap_angle(state.yaw - state.course) + v_mid * (curvature - kappa_eff) * dt
     slip = np.where(sliding, clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
-                    slip * np.exp(-dt / SLIP_RELAX_S))
+                    slip * numerics.exp(-dt / SLIP_RELAX_S))
     mid_course = 0.5 * (state.course + course)
     x = state.x + v_mid * np.cos(mid_course) * dt
     y = state.y + v_mid * np.sin(mid_course) * dt

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas import numerics
+
 
 def clip(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float) -> np.ndarray:
     """``np.clip`` without its Python-level overhead (hot loops call it thousands of times)."""
@@ -63,7 +65,7 @@ def resample_polyline(points: np.ndarray, count: int) -> tuple[np.ndarray, float
 def polyline_headings(points: np.ndarray) -> np.ndarray:
     """Tangent heading at each point of (..., P, 2) polylines [rad] (central differences)."""
     d = np.gradient(points, axis=-2)
-    return np.arctan2(d[..., 1], d[..., 0])
+    return numerics.arctan2(d[..., 1], d[..., 0])
 
 
 def polyline_curvature(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -92,10 +94,10 @@ def points_in_polygons(px: np.ndarray, py: np.ndarray, edges: np.ndarray, edge_o
     with np.errstate(divide="ignore", invalid="ignore"):
         xc = x0 + (Y - y0) * (x1 - x0) / (y1 - y0)
     cross = straddle & (X < xc)
-    onehot = np.zeros((edges.shape[0], num_polygons))
-    onehot[np.arange(edges.shape[0]), edge_owner] = 1.0
-    counts = cross.astype(np.float64) @ onehot
-    return (np.round(counts).astype(np.int64) % 2) == 1
+    onehot = np.zeros((edges.shape[0], num_polygons), dtype=np.int64)
+    onehot[np.arange(edges.shape[0]), edge_owner] = 1
+    counts = cross.astype(np.int64) @ onehot  # integer matmul: numpy's own loop, never BLAS
+    return (counts % 2) == 1
 
 
 def segments_blocked(ox: np.ndarray, oy: np.ndarray, tx: np.ndarray, ty: np.ndarray,
@@ -117,6 +119,16 @@ def segments_blocked(ox: np.ndarray, oy: np.ndarray, tx: np.ndarray, ty: np.ndar
         t = (qpx * sy - qpy * sx) / denom
         u = (qpx * ry - qpy * rx) / denom
     return (np.abs(denom) > 1e-12) & (t > 0.0) & (t < 1.0) & (u >= 0.0) & (u <= 1.0)
+
+
+def _k_smallest(d2: np.ndarray, k: int) -> np.ndarray:
+    """Indices (R, k) of each row's k smallest values, ties broken towards the lower index, in
+    ascending index order. (``argpartition`` breaks ties by its SIMD path, so the same world
+    would get other candidates on another CPU.)"""
+    kth = np.partition(d2, k - 1, axis=1)[:, k - 1:k]  # the k-th smallest value: unique
+    below = d2 < kth
+    tied = (d2 == kth) & (np.cumsum(d2 == kth, axis=1) <= k - below.sum(axis=1, keepdims=True))
+    return np.argsort(~(below | tied), axis=1, kind="stable")[:, :k]
 
 
 class NearestGrid:
@@ -153,7 +165,7 @@ class NearestGrid:
         for start in range(0, centers.shape[0], 1024):
             c = centers[start:start + 1024]
             d2 = (c[:, None, 0] - points[None, :, 0]) ** 2 + (c[:, None, 1] - points[None, :, 1]) ** 2
-            idx = np.argpartition(d2, k_eff - 1, axis=1)[:, :k_eff]
+            idx = _k_smallest(d2, k_eff)
             near = np.take_along_axis(d2, idx, 1) <= radius * radius
             cand[start:start + 1024, :k_eff] = np.where(near, idx, n)
         return cls(lo, cell_m, cand.reshape(gx, gy, k), points)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas import numerics
+
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 _GOLD = np.uint64(0x9E3779B97F4A7C15)
@@ -37,4 +39,4 @@ def uniform(seeds: np.ndarray, tick: int, stream: int, shape: tuple[int, ...]) -
 def normal(seeds: np.ndarray, tick: int, stream: int, shape: tuple[int, ...]) -> np.ndarray:
     """Standard normal numbers, shape ``(N, *shape)`` (Box-Muller over two uniform streams)."""
     u = uniform(seeds, tick, stream, (2, *shape))
-    return np.sqrt(-2.0 * np.log(u[:, 0])) * np.cos(2.0 * np.pi * u[:, 1])
+    return np.sqrt(-2.0 * numerics.log(u[:, 0])) * np.cos(2.0 * np.pi * u[:, 1])

@@ -1,0 +1,202 @@
+"""Elementary functions whose float64 results are the same on every machine.
+
+numpy dispatches ``exp``, ``log``, ``arctan``, ``arctan2``, ``tan``, ``tanh`` and ``power`` to
+SIMD kernels chosen at run time by the CPU (AVX2, AVX-512, or none), and those kernels round
+differently in the last bit; ``@``/``matmul``/``dot`` go to a BLAS whose kernel
+(``OPENBLAS_CORETYPE``) changes the order of a sum. One ulp is enough to move a simulated
+reference across a decision threshold, and with it an analysis's answer. The simulator and the
+stacks therefore use the functions here, which are built only from operations IEEE 754 rounds
+exactly (``+ - * /``, ``sqrt``, ``rint``, ``ldexp``, ``frexp``, comparisons), evaluated
+elementwise in a fixed order, so they give the same bits whatever the SIMD path or BLAS kernel.
+``np.sin``, ``np.cos`` and ``np.hypot`` are used as they are: they do not depend on the
+dispatch path (``tests/test_numerics.py`` checks this in subprocesses).
+
+The algorithms and coefficients are the classic ones of fdlibm (Sun Microsystems, 1993): range
+reduction to a small interval, then a fixed polynomial. Each function is within 1-2 ulp of the
+correctly rounded result over the ranges the simulator uses; what matters more here is that the
+error is the same everywhere.
+
+Every function takes array-likes and returns float64 arrays (or a float64 scalar for scalar
+input, as numpy does).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["arctan", "arctan2", "exp", "log", "power", "rowdot", "sigmoid", "tan", "tanh"]
+
+_LN2_HI = 6.93147180369123816490e-01  # ln 2, high part: k * _LN2_HI is exact for |k| < 2**11
+_LN2_LO = 1.90821492927058770002e-10
+_INV_LN2 = 1.44269504088896338700e00
+_EXP_P = (1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.61375632143793436117e-05,
+          -1.65339022054652515390e-06, 4.13813679705723846039e-08)
+_EXP_MAX, _EXP_MIN = 709.782712893383973096, -745.13321910194110842
+_LOG_LG = (6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239149e-01,
+           2.222219843214978396e-01, 1.818357216161805012e-01, 1.531383769920937332e-01,
+           1.479819860511658591e-01)
+_SQRT2 = 1.41421356237309514547
+_ATAN_HI = (4.63647609000806093515e-01, 7.85398163397448278999e-01, 9.82793723247329054082e-01,
+            1.57079632679489655800e00)
+_ATAN_LO = (2.26987774529616870924e-17, 3.06161699786838301793e-17, 1.39033110312309984516e-17,
+            6.12323399573676603587e-17)
+_ATAN_T = (3.33333333333329318027e-01, -1.99999999998764832476e-01, 1.42857142725034663711e-01,
+           -1.11111104054623557880e-01, 9.09088713343650656196e-02, -7.69187620504482999495e-02,
+           6.66107313738753120669e-02, -5.83357013379057348645e-02, 4.97687799461593236017e-02,
+           -3.65315727442169155270e-02, 1.62858201153657823623e-02)
+_PI_HI = 3.14159265358979311600e00
+_PI_LO = 1.22464679914735317720e-16
+_PI_2_HI = 1.57079632679489655800e00
+_PI_2_LO = 6.12323399573676603587e-17
+
+
+def _out(result: np.ndarray, scalar: bool) -> np.ndarray:
+    return result[()] if scalar else result
+
+
+def exp(x: np.ndarray | float) -> np.ndarray:
+    """e**x, elementwise. Shape: as ``x``."""
+    xa = np.asarray(x, dtype=np.float64)
+    scalar = xa.ndim == 0
+    xc = np.clip(xa, _EXP_MIN, _EXP_MAX)
+    k = np.rint(xc * _INV_LN2)
+    hi = xc - k * _LN2_HI
+    lo = k * _LN2_LO
+    r = hi - lo
+    t = r * r
+    p = _EXP_P
+    c = r - t * (p[0] + t * (p[1] + t * (p[2] + t * (p[3] + t * p[4]))))
+    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
+    out = np.ldexp(y, np.where(k == k, k, 0.0).astype(np.int64))  # NaN: any exponent
+    out = np.where(xa > _EXP_MAX, np.inf, out)
+    out = np.where(xa < _EXP_MIN, 0.0, out)
+    out = np.where(np.isnan(xa), np.nan, out)
+    return _out(out, scalar)
+
+
+def sigmoid(x: np.ndarray | float) -> np.ndarray:
+    """1 / (1 + e**-x), elementwise. Shape: as ``x``."""
+    return 1.0 / (1.0 + exp(-np.asarray(x, dtype=np.float64)))
+
+
+def log(x: np.ndarray | float) -> np.ndarray:
+    """Natural logarithm, elementwise (``-inf`` at 0, NaN below). Shape: as ``x``."""
+    xa = np.asarray(x, dtype=np.float64)
+    scalar = xa.ndim == 0
+    ok = np.isfinite(xa) & (xa > 0.0)
+    m, e = np.frexp(np.where(ok, xa, 1.0))  # xa = m * 2**e, 0.5 <= m < 1
+    big = m < 0.5 * _SQRT2  # move m into [sqrt(2)/2, sqrt(2))
+    m = np.where(big, 2.0 * m, m)
+    k = (e - big.astype(e.dtype)).astype(np.float64)
+    f = m - 1.0
+    s = f / (2.0 + f)
+    z = s * s
+    w = z * z
+    g = _LOG_LG
+    t1 = w * (g[1] + w * (g[3] + w * g[5]))
+    t2 = z * (g[0] + w * (g[2] + w * (g[4] + w * g[6])))
+    r = t2 + t1
+    hfsq = 0.5 * f * f
+    out = k * _LN2_HI - ((hfsq - (s * (hfsq + r) + k * _LN2_LO)) - f)
+    out = np.where(xa == 0.0, -np.inf, out)
+    out = np.where(xa == np.inf, np.inf, out)
+    out = np.where((xa < 0.0) | np.isnan(xa), np.nan, out)
+    return _out(out, scalar)
+
+
+def power(base: np.ndarray | float, exponent: np.ndarray | float) -> np.ndarray:
+    """base**exponent for base >= 0 (0**p is 0 for p > 0 and 1 for p == 0). Shapes broadcast."""
+    b = np.asarray(base, dtype=np.float64)
+    p = np.asarray(exponent, dtype=np.float64)
+    scalar = b.ndim == 0 and p.ndim == 0
+    safe = np.where(b > 0.0, b, 1.0)
+    out = exp(p * log(safe))
+    out = np.where(b == 0.0, np.where(p == 0.0, 1.0, np.where(p > 0.0, 0.0, np.inf)), out)
+    out = np.where(b < 0.0, np.nan, out)
+    return _out(np.asarray(out), scalar)
+
+
+def arctan(x: np.ndarray | float) -> np.ndarray:
+    """Arc tangent in (-pi/2, pi/2), elementwise. Shape: as ``x``."""
+    xa = np.asarray(x, dtype=np.float64)
+    scalar = xa.ndim == 0
+    ax = np.abs(xa)
+    # reduce |x| to |t| < 7/16 around one of four anchors atan(0.5), atan(1), atan(1.5), pi/2
+    sel = np.select([ax < 0.4375, ax < 0.6875, ax < 1.1875, ax < 2.4375], [-1, 0, 1, 2], 3)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = np.select(
+            [sel == -1, sel == 0, sel == 1, sel == 2],
+            [ax, (2.0 * ax - 1.0) / (2.0 + ax), (ax - 1.0) / (ax + 1.0),
+             (ax - 1.5) / (1.0 + 1.5 * ax)],
+            -1.0 / np.where(ax == 0.0, 1.0, ax))
+    z = t * t
+    w = z * z
+    a = _ATAN_T
+    s1 = z * (a[0] + w * (a[2] + w * (a[4] + w * (a[6] + w * (a[8] + w * a[10])))))
+    s2 = w * (a[1] + w * (a[3] + w * (a[5] + w * (a[7] + w * a[9]))))
+    idx = np.maximum(sel, 0)
+    hi = np.asarray(_ATAN_HI)[idx]
+    lo = np.asarray(_ATAN_LO)[idx]
+    anchored = hi - ((t * (s1 + s2) - lo) - t)
+    out = np.where(sel < 0, t - t * (s1 + s2), anchored)
+    out = np.where(ax == np.inf, _PI_2_HI, out)
+    out = np.copysign(out, xa)
+    out = np.where(np.isnan(xa), np.nan, out)
+    return _out(out, scalar)
+
+
+def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
+    """Angle of the point (x, y) in [-pi, pi], elementwise, with C's signed-zero conventions.
+
+    Shapes broadcast.
+    """
+    ya = np.asarray(y, dtype=np.float64)
+    xa = np.asarray(x, dtype=np.float64)
+    scalar = ya.ndim == 0 and xa.ndim == 0
+    ya, xa = np.broadcast_arrays(ya, xa)
+    ay, ax = np.abs(ya), np.abs(xa)
+    steep = ay > ax
+    num = np.where(steep, ax, ay)
+    den = np.where(steep, ay, ax)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(den == 0.0, 0.0, num / np.where(den == 0.0, 1.0, den))
+    both_inf = np.isinf(ax) & np.isinf(ay)
+    ratio = np.where(both_inf, 1.0, ratio)
+    a = arctan(ratio)  # in [0, pi/4]
+    a = np.where(steep, _PI_2_HI - (a - _PI_2_LO), a)
+    a = np.where(np.signbit(xa), _PI_HI - (a - _PI_LO), a)
+    out = np.copysign(a, ya)
+    out = np.where(np.isnan(xa) | np.isnan(ya), np.nan, out)
+    return _out(np.asarray(out), scalar)
+
+
+def tan(x: np.ndarray | float) -> np.ndarray:
+    """Tangent, elementwise, as sin/cos (both dispatch-independent). Shape: as ``x``."""
+    xa = np.asarray(x, dtype=np.float64)
+    return np.sin(xa) / np.cos(xa)
+
+
+def tanh(x: np.ndarray | float) -> np.ndarray:
+    """Hyperbolic tangent, elementwise. Shape: as ``x``.
+
+    Absolute error below 2e-16 (relative error grows for |x| < 1e-8, where tanh(x) ~ x).
+    """
+    xa = np.asarray(x, dtype=np.float64)
+    scalar = xa.ndim == 0
+    ax = np.minimum(np.abs(xa), 40.0)  # tanh(40) == 1.0 in float64
+    out = 1.0 - 2.0 / (exp(2.0 * ax) + 1.0)
+    out = np.copysign(out, xa)
+    out = np.where(np.isnan(xa), np.nan, out)
+    return _out(out, scalar)
+
+
+def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``x @ w`` without BLAS: (N, F) x (F, H) -> (N, H), summed over F in a fixed order.
+
+    Each row's result depends only on that row, so it is the same whatever N is.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
+    # numpy's iteration order, which no CPU feature or BLAS kernel changes
+    return (x[:, :, None] * w[None, :, :]).sum(axis=1)

@@ -1,0 +1,93 @@
+"""rocas.numerics: close to numpy's functions, exact at the special values, and the same bits
+whatever numpy's SIMD path (checked in a subprocess with NPY_DISABLE_CPU_FEATURES)."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rocas import numerics
+
+
+def _ulps(a: np.ndarray, b: np.ndarray) -> int:
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    return int(np.max(np.abs(a.view(np.int64) - b.view(np.int64))))
+
+
+RNG = np.random.default_rng(7)
+WIDE = np.ldexp(RNG.uniform(-1, 1, 20000), RNG.integers(-40, 40, 20000))
+
+
+def test_exp_log_arctan_within_one_ulp_of_numpy():
+    x = np.clip(WIDE, -700, 700)
+    assert _ulps(numerics.exp(x), np.exp(x)) <= 1
+    pos = np.abs(WIDE) + 1e-300
+    assert _ulps(numerics.log(pos), np.log(pos)) <= 1
+    assert _ulps(numerics.arctan(WIDE), np.arctan(WIDE)) <= 1
+    y = RNG.uniform(-50, 50, WIDE.size)
+    assert _ulps(numerics.arctan2(y, WIDE), np.arctan2(y, WIDE)) <= 2
+
+
+def test_special_values():
+    assert numerics.exp(0.0) == 1.0 and numerics.exp(-np.inf) == 0.0 and numerics.exp(800.0) == np.inf
+    assert numerics.log(1.0) == 0.0 and numerics.log(0.0) == -np.inf and np.isnan(numerics.log(-1.0))
+    for y, x in [(0.0, 0.0), (-0.0, 0.0), (0.0, -0.0), (-0.0, -0.0), (1.0, 0.0), (-1.0, 0.0),
+                 (0.0, -1.0), (-0.0, -1.0), (np.inf, 1.0), (1.0, -np.inf), (-np.inf, -np.inf)]:
+        got, want = numerics.arctan2(y, x), np.arctan2(y, x)
+        assert _ulps(got, want) <= 1 and np.signbit(got) == np.signbit(want), (y, x)
+    assert numerics.power(0.0, 2.0) == 0.0 and numerics.power(0.0, 0.0) == 1.0
+    assert numerics.power(2.0, 10.0) == pytest.approx(1024.0, rel=1e-15)
+    assert np.isnan(numerics.exp(np.nan)) and np.isnan(numerics.arctan(np.nan))
+
+
+def test_tanh_sigmoid_tan_power_are_close():
+    x = RNG.uniform(-25, 25, 5000)
+    assert np.max(np.abs(numerics.tanh(x) - np.tanh(x))) <= 4e-16
+    assert np.max(np.abs(numerics.sigmoid(x) - 1 / (1 + np.exp(-x)))) <= 4e-16
+    t = RNG.uniform(-1.5, 1.5, 5000)
+    assert np.allclose(numerics.tan(t), np.tan(t), rtol=1e-15, atol=0)
+    b, p = RNG.uniform(0, 30, 5000), RNG.uniform(0.1, 8, 5000)
+    assert np.allclose(numerics.power(b, p), b ** p, rtol=1e-13, atol=0)
+
+
+def test_rowdot_is_the_product_and_does_not_depend_on_the_batch():
+    x, w = RNG.normal(size=(33, 64)), RNG.normal(size=(64, 16))
+    full = numerics.rowdot(x, w)
+    assert np.allclose(full, x @ w, rtol=1e-12, atol=1e-12)
+    assert all(np.array_equal(numerics.rowdot(x[i:i + 1], w), full[i:i + 1]) for i in range(33))
+
+
+def test_scalars_stay_scalars():
+    assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
+
+
+_CHILD = """
+import hashlib, numpy as np
+from rocas import numerics as n
+rng = np.random.default_rng(3)
+x = np.ldexp(rng.uniform(-1, 1, 50000), rng.integers(-28, 28, 50000)); y = rng.normal(size=50000)
+out = [n.exp(np.clip(x, -700, 700)), n.log(np.abs(x)), n.arctan(x), n.arctan2(y, x), n.tanh(y),
+       n.tan(y), n.power(np.abs(x), np.abs(y)), n.rowdot(x[:4096].reshape(64, 64), y[:4096].reshape(64, 64))]
+print(hashlib.sha256(b"".join(a.tobytes() for a in out)).hexdigest())
+"""
+
+
+def test_the_same_bits_on_every_simd_path():
+    info = np.lib._utils_impl._opt_info()
+    dispatched = [tok.rstrip("*") for tok in info.split() if tok.endswith("*")]
+    if not dispatched:
+        pytest.skip(f"numpy dispatches to no SIMD path above its baseline here ({info})")
+    digests = set()
+    for disabled in ("", " ".join(dispatched[-1:]), " ".join(dispatched)):
+        env = dict(os.environ, NPY_DISABLE_CPU_FEATURES=disabled)
+        done = subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True,
+                              text=True, timeout=120, check=True)
+        digests.add(done.stdout.strip())
+    assert len(digests) == 1
+    assert len(next(iter(digests))) == len(hashlib.sha256().hexdigest())
