@@ -3,15 +3,18 @@
 The caller supplies ``evaluate(mutations) -> [(objectives, constraint)]`` for a whole batch
 (where it fans out to an executor). ``constraint <= 0`` means the accident is avoided; a
 graded value (e.g. how far the run was from being safe) guides the search towards
-feasibility. The state after each generation can be checkpointed (the pymoo algorithm,
-including its random generator, is pickled), so a resumed search continues exactly where it
-stopped and gives the same result as an uninterrupted one.
+feasibility. After each generation the evaluations so far can be checkpointed as JSON (data,
+never code: a checkpoint from someone else's run directory cannot run anything). A resumed
+search replays the same seeded NSGA-II from the start, answering every evaluation it already
+has from the checkpoint, so it reaches the interrupted generation without a simulation and
+continues exactly as an uninterrupted search would.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
-import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -117,6 +120,11 @@ class _State:
     candidates: list[Candidate]
     generations: list[GenerationStats]
     cache: dict[Mutation, Evaluation]
+    replayed: int = 0  # generations a resumed search re-runs from its checkpoint (no callback)
+
+
+CHECKPOINT_FORMAT = "rocas-search-checkpoint"
+CHECKPOINT_VERSION = 1
 
 
 def _initial_population(space: MutationSpace, cfg: SearchConfig) -> np.ndarray:
@@ -148,19 +156,19 @@ def run_search(
     from rocas.search._survival import StableRankAndCrowding, quantize
 
     ckpt = Path(checkpoint) if checkpoint else None
+    problem = SearchProblem(space.n_genes, n_objectives)
+    state = _State(None, problem, [], [], {})
     if ckpt is not None and ckpt.exists():
-        state: _State = _load_checkpoint(ckpt)
-    else:
-        problem = SearchProblem(space.n_genes, n_objectives)
-        state = _State(None, problem, [], [], {})
-        sampling = _initial_population(space, cfg)
-        if cfg.screen:
-            sampling = _screen(space, evaluate, cfg, state, on_generation)
-        algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True,
-                          survival=StableRankAndCrowding())
-        algorithm.setup(problem, termination=get_termination("n_gen", cfg.generations),
-                        seed=cfg.seed, verbose=False)
-        state.algorithm = algorithm
+        state.candidates, state.replayed = _load_checkpoint(ckpt, space, cfg)
+        state.cache = {c.mutation: (c.objectives, c.constraint) for c in state.candidates}
+    sampling = _initial_population(space, cfg)
+    if cfg.screen:
+        sampling = _screen(space, evaluate, cfg, state, on_generation)
+    algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True,
+                      survival=StableRankAndCrowding())
+    algorithm.setup(problem, termination=get_termination("n_gen", cfg.generations),
+                    seed=cfg.seed, verbose=False)
+    state.algorithm = algorithm
 
     algo, problem = state.algorithm, state.problem
     while algo.has_next():
@@ -182,11 +190,11 @@ def run_search(
         stats = GenerationStats(gen, len(state.candidates), int((g[:, 0] <= 0).sum()),
                                 float(g.min()), f, g[:, 0])
         state.generations.append(stats)
-        if on_generation is not None:
+        replaying = len(state.generations) <= state.replayed
+        if on_generation is not None and not replaying:
             on_generation(stats)
-        if ckpt is not None:
-            with atomic_path(ckpt) as tmp, open(tmp, "wb") as fh:
-                pickle.dump(state, fh)
+        if ckpt is not None and not replaying:
+            _write_checkpoint(ckpt, space, cfg, state)
         if (cfg.stop_when_feasible_after and gen >= cfg.stop_when_feasible_after
                 and any(c.feasible for c in state.candidates)):
             break
@@ -194,25 +202,65 @@ def run_search(
     return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
 
 
-def _load_checkpoint(ckpt: Path) -> _State:
-    """The search state a checkpoint holds.
+def _identity(space: MutationSpace, cfg: SearchConfig) -> dict[str, Any]:
+    return {"variables": [v.name for v in space.variables],
+            "config": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__}}
+
+
+def _write_checkpoint(ckpt: Path, space: MutationSpace, cfg: SearchConfig, state: _State) -> None:
+    doc = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, **_identity(space, cfg),
+           "generations": len(state.generations),
+           "candidates": [{"values": dict(c.mutation.values), "objectives": list(c.objectives),
+                           "constraint": c.constraint, "generation": c.generation}
+                          for c in state.candidates]}
+    with atomic_path(ckpt) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, allow_nan=True)
+
+
+def _load_checkpoint(ckpt: Path, space: MutationSpace, cfg: SearchConfig
+                     ) -> tuple[list[Candidate], int]:
+    """The candidates a checkpoint holds and the number of generations it had completed.
 
     Raises:
-        InputError: the file cannot be read or does not hold a search state (truncated,
-            overwritten, or written by an incompatible version).
+        InputError: the file cannot be read, is not a search checkpoint (truncated,
+            overwritten, or written by an incompatible version), or belongs to another search.
     """
     hint = f"delete {ckpt} to restart this search from its first generation"
     try:
-        with open(ckpt, "rb") as f:
-            state = pickle.load(f)
+        with open(ckpt, encoding="utf-8") as f:
+            doc = json.load(f)
     except OSError as exc:
         raise InputError(f"cannot read search checkpoint {ckpt}: {exc.strerror or exc}", hint) from None
-    except Exception as exc:  # noqa: BLE001 - unpickling a damaged file raises almost anything
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise InputError(f"search checkpoint {ckpt} is damaged (not JSON: {exc})", hint) from None
+    if not isinstance(doc, dict) or doc.get("format") != CHECKPOINT_FORMAT:
+        raise InputError(f"search checkpoint {ckpt} does not hold a search state", hint)
+    if doc.get("version") != CHECKPOINT_VERSION:
+        raise InputError(f"search checkpoint {ckpt} has version {doc.get('version')!r}; this rocas "
+                         f"reads version {CHECKPOINT_VERSION}", hint)
+    if {k: doc.get(k) for k in ("variables", "config")} != _identity(space, cfg):
+        raise InputError(f"search checkpoint {ckpt} belongs to another search (other variables "
+                         "or settings)", hint)
+    names = set(doc["variables"])
+    try:
+        candidates = [_candidate(c, names) for c in doc["candidates"]]
+        generations = int(doc["generations"])
+    except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"search checkpoint {ckpt} is damaged ({type(exc).__name__}: {exc})",
                          hint) from None
-    if not isinstance(state, _State):
-        raise InputError(f"search checkpoint {ckpt} does not hold a search state", hint)
-    return state
+    return candidates, generations
+
+
+def _candidate(c: dict[str, Any], names: set[str]) -> Candidate:
+    values = c["values"]
+    if not isinstance(values, dict) or not set(values) <= names \
+            or not all(isinstance(v, bool | int | float | str) for v in values.values()):
+        raise ValueError("a candidate's values are not a mapping of the space's variables")
+    objectives = tuple(float(o) for o in c["objectives"])
+    constraint = float(c["constraint"])
+    if math.isnan(constraint):
+        raise ValueError("a candidate's constraint is NaN")
+    return Candidate(Mutation(values), objectives, constraint, int(c["generation"]))
 
 
 def screening_genomes(space: MutationSpace, seed: int) -> np.ndarray:
@@ -237,14 +285,15 @@ def _screen(space: MutationSpace, evaluate: BatchEvaluate, cfg: SearchConfig, st
     for m, ev in zip(todo, evaluate(todo), strict=True):
         state.cache[m] = ev
         state.candidates.append(Candidate(m, tuple(ev[0]), float(ev[1]), 0))
-    if state.candidates:
-        f = np.array([c.objectives for c in state.candidates], dtype=float)
-        g = np.array([c.constraint for c in state.candidates], dtype=float)
-        stats = GenerationStats(0, len(state.candidates), int((g <= 0).sum()), float(g.min()), f, g)
+    screened = [c for c in state.candidates if c.generation == 0]
+    if screened:
+        f = np.array([c.objectives for c in screened], dtype=float)
+        g = np.array([c.constraint for c in screened], dtype=float)
+        stats = GenerationStats(0, len(screened), int((g <= 0).sum()), float(g.min()), f, g)
         state.generations.append(stats)
-        if on_generation is not None:
+        if on_generation is not None and state.replayed == 0:
             on_generation(stats)
-    ranked = sorted(state.candidates, key=lambda c: (c.constraint > 0, c.constraint, sum(c.objectives)))
+    ranked = sorted(screened, key=lambda c: (c.constraint > 0, c.constraint, sum(c.objectives)))
     best = [space.encode(c.mutation) for c in ranked[: cfg.population]]
     if len(best) < cfg.population:
         rng = np.random.default_rng(cfg.seed)

@@ -1,8 +1,11 @@
+import json
+import pickle
+
 import pytest
 import search_toy
 from search_toy import SPACE
 
-from rocas.errors import UsageError
+from rocas.errors import InputError, UsageError
 from rocas.search import LocalExecutor, SearchConfig, SerialExecutor, make_executor, run_search
 from rocas.search.minimize import shrink_magnitudes, shrink_set
 from rocas.search.space import Mutation
@@ -48,6 +51,60 @@ def test_resume_continues_to_the_same_result(tmp_path):
         _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop_after_three)
     assert ckpt.exists()
     assert _summary(_search(SerialExecutor(), checkpoint=ckpt)) == full
+
+
+def test_a_resume_replays_from_the_checkpoint_without_evaluating_again(tmp_path):
+    ckpt = tmp_path / "search.ckpt"
+
+    def stop_after_three(stats):
+        if stats.generation == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop_after_three)
+    saved = json.loads(ckpt.read_text())  # data, not a pickle
+    assert saved["format"] == "rocas-search-checkpoint" and saved["generations"] == 2
+    evaluated = []
+
+    def evaluate(mutations):
+        evaluated.extend(mutations)
+        return [search_toy.simulate(m) for m in mutations]
+
+    seen = []
+    res = run_search(SPACE, evaluate, CFG, n_objectives=2, checkpoint=ckpt,
+                     on_generation=lambda s: seen.append(s.generation))
+    before = {Mutation(c["values"]) for c in saved["candidates"]}
+    assert evaluated and not before & set(evaluated)
+    assert seen == [3, 4, 5, 6]  # the replayed generations are not reported again
+    assert len(res.candidates) == len(before) + len(evaluated)
+
+
+def test_a_checkpoint_is_never_unpickled(tmp_path):
+    ckpt = tmp_path / "search.ckpt"
+    marker = tmp_path / "ran"
+
+    class Payload:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    ckpt.write_bytes(pickle.dumps(Payload()))
+    with pytest.raises(InputError, match="damaged"):
+        _search(SerialExecutor(), checkpoint=ckpt)
+    assert not marker.exists()
+
+
+def test_a_checkpoint_of_another_search_is_refused(tmp_path):
+    from dataclasses import replace
+
+    ckpt = tmp_path / "search.ckpt"
+
+    def stop(stats):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _search(SerialExecutor(), checkpoint=ckpt, on_generation=lambda s: s.generation == 2 and stop(s))
+    with pytest.raises(InputError, match="another search"):
+        _search(SerialExecutor(), checkpoint=ckpt, cfg=replace(CFG, seed=4))
 
 
 def test_the_search_can_stop_early_once_a_fix_is_known():
