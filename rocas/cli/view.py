@@ -60,9 +60,9 @@ def write_rrd(source: Path, out: Path) -> tuple[str, list[str]]:
         if "verdict_md" in contents:
             parts.append("verdict")
         return "; ".join(parts), [w for n in shown for w in contents[n].warnings]
-    ex = write_recording_rrd(out, source)
+    ex, topics = write_recording_rrd(out, source)
     found = ", ".join(f"{k} from {v}" for k, v in ex.sources.items()) or "no scene channels"
-    return f"{found}; {len(ex.channels)} channels plotted", list(ex.warnings)
+    return f"{found}; {len(topics)} channels through Rerun's MCAP importer", list(ex.warnings)
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
