@@ -52,7 +52,7 @@ def test_view_errors(rocas, tmp_path):
     res = rocas("view", tmp_path, "--no-viewer", "--rrd", tmp_path / "x.rrd")
     assert res.code != 0 and "no accident.mcap" in res.stderr
     res = rocas("view", tmp_path, "--no-viewer")
-    assert res.code != 0 and "--rrd" in res.stderr
+    assert res.code == 2 and "--rrd" in res.stderr and "(see 'rocas view --help')" in res.stderr
     assert not (tmp_path / "x.rrd").exists()
 
 
