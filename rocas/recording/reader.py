@@ -190,7 +190,8 @@ def _check_file(path: Path) -> int:
     if head != MAGIC:
         raise RecordingError(
             f"{path} is not an MCAP file (it does not start with the MCAP magic bytes)",
-            "rocas reads MCAP recordings; convert other formats with the mcap CLI",
+            "rocas reads MCAP recordings; convert ROS bags with 'rosbags-convert --src BAG --dst OUT "
+            "--dst-storage mcap' (installed with rocas; OUT is a folder holding the .mcap)",
         )
     return size
 
