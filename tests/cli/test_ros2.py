@@ -63,3 +63,18 @@ def test_view_refuses_a_recording_without_messages(rocas, tmp_path):
     res = rocas("view", empty, "--rrd", out, "--no-viewer")
     assert res.code == 3 and "nothing to show" in res.stderr
     assert not out.exists()
+
+
+def test_callerid_on_a_ros2_channel_names_its_writer(rocas, tmp_path):
+    path = tmp_path / "callerid.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2")
+        sid = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+        cid = w.register_channel("/speed", "cdr", sid, {"callerid": "/speed_node",
+                                                        "offered_qos_profiles": ""})
+        w.add_message(cid, log_time=0, publish_time=0, data=b"\x00\x01\x00\x00" + bytes(8))
+        w.finish()
+    res = rocas("cmg", path, "--format", "json")
+    assert res.code == 0, res.stderr
+    assert "/speed_node" in res.stdout and "callerid" in res.stdout
