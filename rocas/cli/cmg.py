@@ -141,8 +141,8 @@ def _notes(topology: Mapping[str, ChannelTopology],
         odd = [e for e in encodings if e not in DECODABLE_ENCODINGS]
         if odd:
             notes.append(
-                f"{topic} is {'/'.join(odd) or 'unencoded'}: rocas decodes only protobuf and "
-                "json, so 'rocas diff' skips its messages; it stays in the graph"
+                f"{topic} is {'/'.join(odd) or 'unencoded'}: rocas decodes only protobuf, "
+                "json and ROS 2 cdr, so 'rocas diff' skips its messages; it stays in the graph"
             )
     return notes
 

@@ -24,7 +24,7 @@ from typing import NoReturn
 from rocas import __version__
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus, exit_status_for
-from rocas.errors import RocasError, Terminated
+from rocas.errors import RocasError, Terminated, UsageError
 
 #: Command name -> module under rocas.cli. Modules that are not present are not offered.
 COMMANDS: dict[str, str] = {
@@ -89,6 +89,10 @@ def _add_traceback(p: argparse.ArgumentParser) -> None:
 def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     """Entry point of the console script; returns (and, as a script, exits with) a status."""
     env = env or Env()
+    args_list = sys.argv[1:] if argv is None else list(argv)
+    if args_list == ["--version"]:  # answered before the commands (and numpy) are imported
+        env.stdout.write(f"rocas {__version__}\n")
+        return ExitStatus.SUCCESS
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -112,7 +116,10 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     except RocasError as exc:
         if args.traceback:
             traceback.print_exc(file=env.stderr)
-        env.error(str(exc))
+        if isinstance(exc, UsageError) and exc.hint is None:  # an option error: where to look
+            env.error(f"{exc} (see 'rocas {args.command} --help')")
+        else:
+            env.error(str(exc))
         return exit_status_for(exc)
     except BrokenPipeError:
         return ExitStatus.SUCCESS

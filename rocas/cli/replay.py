@@ -33,14 +33,14 @@ def _accident(a: object | None) -> str:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.ads.params import parse_assignment
+    from rocas.cli.params import parse_set_options
     from rocas.replay import replay
 
     if args.output is not None and not str(args.output).endswith(".mcap"):
         raise UsageError(f"output {args.output!r} should end in .mcap")
     if args.output is not None:
         check_writable(args.output)
-    overrides = dict(parse_assignment(a) for a in args.assignments)
+    overrides = parse_set_options(args.assignments, "replay")
     report = replay(args.recording, overrides or None, output=args.output)
     rec = report.reconstruction
     assert rec is not None

@@ -13,7 +13,8 @@ still yields everything before and around the damage:
 Decoding needs no generated code: protobuf classes are built from the schema records,
 with one ``mcap_protobuf`` decoder factory per opened file (a shared factory caches
 classes by schema id and would decode a second file with the first file's classes).
-JSON channels are decoded with :func:`json.loads`.
+JSON channels are decoded with :func:`json.loads`, ROS 2 (cdr) channels with ``rosbags``
+(:mod:`rocas.recording.decoding`).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ _SPEC_OPCODES = frozenset(range(0x01, 0x10))
 # every offset is tried: a false candidate that overlaps a real header must not hide it.
 _CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
-DECODABLE_ENCODINGS = ("protobuf", "json")
+DECODABLE_ENCODINGS = ("protobuf", "json", "cdr")
 
 
 @dataclass(frozen=True)
@@ -163,7 +164,7 @@ class ReadReport:
             if st.skipped_encoding:
                 out.append(
                     f"{name}: skipped channel {topic}: {st.skipped_encoding} messages in an "
-                    "encoding rocas cannot decode (only protobuf and json are compared)"
+                    "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
                 )
             if st.undecodable:
                 out.append(
@@ -189,7 +190,8 @@ def _check_file(path: Path) -> int:
     if head != MAGIC:
         raise RecordingError(
             f"{path} is not an MCAP file (it does not start with the MCAP magic bytes)",
-            "rocas reads MCAP recordings; convert other formats with the mcap CLI",
+            "rocas reads MCAP recordings; convert ROS bags with 'rosbags-convert --src BAG --dst OUT "
+            "--dst-storage mcap' (installed with rocas; OUT is a folder holding the .mcap)",
         )
     return size
 
