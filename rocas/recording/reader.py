@@ -154,8 +154,12 @@ class ReadReport:
             or any(st.undecodable for st in self.channel_stats.values())
         )
 
-    def warnings(self, name: str) -> list[str]:
-        """Human-readable warning lines (without the ``rocas: warning:`` prefix)."""
+    def warnings(self, name: str, skipped_encodings: bool = True) -> list[str]:
+        """Human-readable warning lines (without the ``rocas: warning:`` prefix).
+
+        ``skipped_encodings=False`` leaves out channels skipped for their encoding (for a
+        caller that explains encodings itself).
+        """
         out: list[str] = []
         if self.truncated:
             pct = 100.0 * self.bytes_read / max(self.bytes_total, 1)
@@ -185,7 +189,7 @@ class ReadReport:
                 "that were never declared (lost with a damaged chunk?)"
             )
         for topic, st in sorted(self.channel_stats.items()):
-            if st.skipped_encoding:
+            if st.skipped_encoding and skipped_encodings:
                 out.append(
                     f"{name}: skipped channel {topic}: {st.skipped_encoding} messages in an "
                     "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
