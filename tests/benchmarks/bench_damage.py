@@ -126,8 +126,9 @@ def main() -> None:
     ap.add_argument("--workdir", default=None, help="where reference runs are kept (reused)")
     args = ap.parse_args()
 
-    import rocas
     from fuzz.structural import COMMANDS, REFUSED, SILENT_CHANGED, SILENT_SAME, WARNED
+
+    import rocas
 
     print(f"rocas from {Path(rocas.__file__).parent}")
     workdir = Path(args.workdir or tempfile.mkdtemp(prefix="rocas-damage-"))
