@@ -118,12 +118,28 @@ def _run(number: int) -> tuple[int, str, str, dict[str, str]]:
     return number, kind, what + (f" (silent change: {', '.join(worst)})" if worst else ""), out
 
 
+def _table(table, by_kind, wall: float, workers: int) -> None:
+    from fuzz.structural import COMMANDS, REFUSED, SILENT_CHANGED, SILENT_SAME, WARNED
+
+    n = sum(by_kind.values())
+    print(f"inputs: {n} ({', '.join(f'{k} {v}' for k, v in sorted(by_kind.items()))}); "
+          f"{wall:.0f} s on {workers} workers")
+    cols = (REFUSED, WARNED, SILENT_SAME, SILENT_CHANGED)
+    print(f"| command | inputs | {' | '.join(cols)} |")
+    print("|---|---:|" + "---:|" * len(cols))
+    for c in COMMANDS:
+        print(f"| {c} | {sum(table[c].values())} | "
+              + " | ".join(str(table[c][o]) for o in cols) + " |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--inputs", type=int, default=3000)
     ap.add_argument("--first", type=int, default=0, help="first input number (seed)")
     ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     ap.add_argument("--workdir", default=None, help="where reference runs are kept (reused)")
+    ap.add_argument("--report-every", type=int, default=0,
+                    help="also print the table after every N inputs (0: only at the end)")
     args = ap.parse_args()
 
     from fuzz.structural import COMMANDS, REFUSED, SILENT_CHANGED, SILENT_SAME, WARNED
@@ -138,7 +154,7 @@ def main() -> None:
     _STATE["pairs"] = pairs
     _STATE["seeds"] = [p[0].read_bytes() for p in pairs]
     _STATE["bases"] = _baselines(pairs)
-    print(f"{len(pairs)} pairs, baselines in {time.perf_counter() - t0:.0f} s")
+    print(f"{len(pairs)} pairs, baselines in {time.perf_counter() - t0:.0f} s", flush=True)
     table = {c: collections.Counter() for c in COMMANDS}
     by_kind: collections.Counter[str] = collections.Counter()
     worst: list[str] = []
@@ -153,16 +169,10 @@ def main() -> None:
                     table[c][o] += 1
                 if SILENT_CHANGED in out.values():
                     worst.append(f"  input {number} ({kind}): {what}")
-    wall = time.perf_counter() - t1
-    n = sum(by_kind.values())
-    print(f"inputs: {n} ({', '.join(f'{k} {v}' for k, v in sorted(by_kind.items()))}); "
-          f"{wall:.0f} s on {args.workers} workers")
-    cols = (REFUSED, WARNED, SILENT_SAME, SILENT_CHANGED)
-    print(f"| command | inputs | {' | '.join(cols)} |")
-    print("|---|---:|" + "---:|" * len(cols))
-    for c in COMMANDS:
-        print(f"| {c} | {sum(table[c].values())} | "
-              + " | ".join(str(table[c][o]) for o in cols) + " |")
+                done = sum(by_kind.values())
+                if args.report_every and done % args.report_every == 0 and done < args.inputs:
+                    _table(table, by_kind, time.perf_counter() - t1, args.workers)
+    _table(table, by_kind, time.perf_counter() - t1, args.workers)
     for line in sorted(worst)[:30]:
         print(line)
 
