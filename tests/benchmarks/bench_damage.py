@@ -142,7 +142,7 @@ def main() -> None:
                     help="also print the table after every N inputs (0: only at the end)")
     args = ap.parse_args()
 
-    from fuzz.structural import COMMANDS, REFUSED, SILENT_CHANGED, SILENT_SAME, WARNED
+    from fuzz.structural import COMMANDS, SILENT_CHANGED
 
     import rocas
 
