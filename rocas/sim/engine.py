@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas.ads.params import ParamSet, stack_params
-from rocas.ads.stack import AdsStack, TickOutputs, output_digest
+from rocas.ads.stack import AdsStack, OracleModules, TickOutputs, output_digest
 from rocas.scenarios.model import Scenario
 from rocas.sim.actors import initial_actors, step_actors
 from rocas.sim.dynamics import VehicleState, bicycle_step
@@ -88,10 +88,11 @@ def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleStat
 
 def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[ParamSet], *,
          publish: Publisher | None = None, track_outputs: bool = False,
-         on_tick: Callable[[int], None] | None = None) -> BatchResult:
+         on_tick: Callable[[int], None] | None = None,
+         oracle_modules: OracleModules = frozenset()) -> BatchResult:
     n = world.batch_size
     scenario = scenarios[0]  # the structure (route, start arc length) all variants share
-    stack = AdsStack(world, stack_params(param_sets))
+    stack = AdsStack(world, stack_params(param_sets), oracle_modules)
     ego = initial_ego(world, scenarios)
     actors = initial_actors(world)
     friction = road_friction(world.weather[:, 1])
@@ -117,7 +118,7 @@ def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[
     record(0)
     for tick in range(steps):
         t = tick * world.dt_s
-        out = stack.step(tick, ego, accel, actors.body)
+        out = stack.step(tick, ego, accel, actors.body, actors)
         if publish is not None:
             publish(tick, t, out)
         if digests is not None:
@@ -148,6 +149,7 @@ def simulate_batch(
     seeds: Sequence[int] | None = None,
     *,
     track_outputs: bool = False,
+    oracle_modules: OracleModules = frozenset(),
 ) -> BatchResult:
     """Simulate N variants together (batch mode; records nothing).
 
@@ -158,6 +160,9 @@ def simulate_batch(
             scenario's own ``ego.params``; None means none.
         seeds: N seeds; None means each scenario's seed.
         track_outputs: also return per-module output fingerprints (``digests``).
+        oracle_modules: modules whose output is replaced by ground truth (module
+            substitution, :mod:`rocas.ads.oracle`): one set of names for every variant, or N
+            sets; empty (the default) runs the ADS as it is.
 
     Returns:
         :class:`BatchResult`; variant i is identical to ``simulate(scenarios[i], params[i],
@@ -175,7 +180,8 @@ def simulate_batch(
     seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
     world = compile_batch(scenarios, seeds)
     sets = [resolve_params(s, p) for s, p in zip(scenarios, params, strict=True)]
-    return _run(world, scenarios, sets, track_outputs=track_outputs)
+    return _run(world, scenarios, sets, track_outputs=track_outputs,
+                oracle_modules=oracle_modules)
 
 
 def simulate(

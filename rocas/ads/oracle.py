@@ -1,0 +1,255 @@
+"""Ground-truth substitutes of ADS modules (module substitution, a second opinion on blame).
+
+Because rocas owns the simulator, a module's output can be replaced by what the module is
+meant to report, computed from the simulation's true state, in the same message vocabulary:
+
+- **perception**: every obstacle slot (actor m is slot m, map object e is slot A + e) published
+  with its true pose, velocity, acceleration, size, class and colour, stable track ids; the
+  brake signal is the classifier's own training truth (:func:`classifier.brake_worthy`: a body
+  reaching into the ego's corridor close ahead), not a learned guess; the traffic light is the
+  true colour of the light that governs the ego's route (its stop line on the route, not yet
+  passed). Things perception has no vocabulary for (buildings, vegetation) stay unreported.
+- **prediction**: for the obstacles perception published, their true future trajectories from
+  the simulation's own actor model (:func:`rocas.sim.actors.step_actors`) rolled forward from
+  the true state. Actors that do not react to traffic follow their route and speed profile
+  whatever the ego does, so their forecast is exactly what will happen; actors that keep a
+  distance (``reactive``) are rolled forward against a ghost ego that keeps its current speed
+  and course, the one assumption a forecast cannot avoid. Current states (position, speed,
+  class) pass through from perception, as the real module passes them.
+
+Planning has no substitute: there is no ground truth of what a plan should be. An oracle that
+searched the true future for a collision-free plan would be another ADS, and its success
+would say only that the accident was avoidable.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rocas.ads import classifier
+from rocas.ads.localization import LocalizationOutput
+from rocas.ads.perception import (
+    ST_BOX,
+    ST_CAR,
+    ST_CONE,
+    ST_CYCLIST,
+    ST_PEDESTRIAN,
+    T_BICYCLE,
+    T_PEDESTRIAN,
+    T_UNKNOWN_UNMOVABLE,
+    T_VEHICLE,
+    TL_UNKNOWN,
+    ObstacleFrame,
+    PerceptionOutput,
+    sim_light_to_tl,
+)
+from rocas.ads.prediction import (
+    INTENT_STATIONARY,
+    INTENT_UNKNOWN,
+    MAX_POINTS,
+    PredictionOutput,
+    perceived_world_state,
+)
+from rocas.sim.actors import ActorState, step_actors
+from rocas.sim.dynamics import VehicleState
+from rocas.sim.geometry import clip, wrap_angle
+from rocas.sim.world import (
+    KIND_BOX,
+    KIND_CONE,
+    KIND_CYCLIST,
+    KIND_PEDESTRIAN,
+    BatchWorld,
+    project_on_reference,
+    road_friction,
+)
+
+#: Modules that have a ground-truth substitute, in data-flow order.
+SUBSTITUTABLE = ("perception", "prediction")
+#: A light stays the ego's until its front is this far past the stop line [m].
+LIGHT_PASSED_M = 1.0
+#: An obstacle whose true speed stays below this over the forecast horizon is static [m/s].
+STILL_SPEED_MPS = 0.05
+
+
+class PerfectPerception:
+    """Publishes the true obstacles, brake signal and traffic light (see the module doc)."""
+
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+        self.world = world
+        self.brake_threshold = params["perception.brake_threshold"]
+        n, a = world.actor_kind.shape
+        self.prev_v: tuple[np.ndarray, np.ndarray] | None = None
+        self.accel = (np.zeros((n, a)), np.zeros((n, a)))
+
+    def observe(self, actors: VehicleState) -> None:
+        """Called every simulation step: the true accelerations are the change of the true
+        velocity over the last step."""
+        vx = actors.speed * np.cos(actors.course)
+        vy = actors.speed * np.sin(actors.course)
+        if self.prev_v is not None:
+            dt = self.world.dt_s
+            self.accel = ((vx - self.prev_v[0]) / dt, (vy - self.prev_v[1]) / dt)
+        self.prev_v = (vx, vy)
+
+    def step(self, t: float, ego: VehicleState, actors: VehicleState, gt: ObstacleFrame,
+             light_colors: np.ndarray, loc: LocalizationOutput) -> PerceptionOutput:
+        n, m = gt.x.shape
+        na = actors.x.shape[1]
+        zeros_obj = np.zeros((n, m - na))
+        vx = np.concatenate([self.prev_v[0], zeros_obj], 1)
+        vy = np.concatenate([self.prev_v[1], zeros_obj], 1)
+        ax = np.concatenate([self.accel[0], zeros_obj], 1)
+        ay = np.concatenate([self.accel[1], zeros_obj], 1)
+        # the ego frame of the localization estimate, as the real module publishes
+        lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
+        dx, dy = gt.x - loc.x[:, None], gt.y - loc.y[:, None]
+        static_obj = (gt.kind == KIND_CONE) | (gt.kind == KIND_BOX)
+        is_ped = gt.kind == KIND_PEDESTRIAN
+        is_bike = gt.kind == KIND_CYCLIST
+        typ = np.where(static_obj, T_UNKNOWN_UNMOVABLE, np.where(
+            is_ped, T_PEDESTRIAN, np.where(is_bike, T_BICYCLE, T_VEHICLE)))
+        sub = np.where(gt.kind == KIND_CONE, ST_CONE, np.where(
+            gt.kind == KIND_BOX, ST_BOX, np.where(is_ped, ST_PEDESTRIAN, np.where(
+                is_bike, ST_CYCLIST, clip(gt.model, 0, 3) + ST_CAR))))
+        # brake signal: the classifier's training truth in the true ego frame
+        ce, se = np.cos(ego.yaw)[:, None], np.sin(ego.yaw)[:, None]
+        ex, ey = gt.x - ego.x[:, None], gt.y - ego.y[:, None]
+        brake = classifier.brake_worthy(ex * ce + ey * se, -ex * se + ey * ce, gt.length,
+                                        gt.width, gt.yaw - ego.yaw[:, None]).any(axis=1)
+        return PerceptionOutput(
+            published=np.ones((n, m), dtype=bool),
+            track_id=np.broadcast_to(np.arange(1, m + 1), (n, m)).copy(),
+            type=typ, sub_type=sub, color=gt.color.copy(),
+            x=dx * lc + dy * ls, y=-dx * ls + dy * lc,
+            theta=wrap_angle(gt.yaw - loc.heading[:, None]),
+            vx=vx * lc + vy * ls, vy=-vx * ls + vy * lc,
+            ax=ax * lc + ay * ls, ay=-ax * ls + ay * lc,
+            length=gt.length, width=gt.width, height=gt.height,
+            confidence=np.ones((n, m)), tracking_time=np.full((n, m), t),
+            ego_x=loc.x, ego_y=loc.y, ego_heading=loc.heading,
+            brake_probability=brake.astype(np.float64), brake_threshold=self.brake_threshold,
+            brake=brake, **self._lights(ego, light_colors),
+        )
+
+    def _lights(self, ego: VehicleState, colors: np.ndarray) -> dict[str, np.ndarray]:
+        """The light governing the ego: its stop line on the ego route, the nearest one the
+        ego's front has not passed by more than LIGHT_PASSED_M."""
+        w = self.world
+        n, nl = colors.shape
+        if nl == 0:
+            z = np.zeros((n, 0))
+            return {"tl_detected": z.astype(bool), "tl_color": z.astype(np.int64),
+                    "tl_confidence": z, "tl_distance": z, "tl_selected": np.full(n, -1)}
+        _, s, _ = project_on_reference(w.road, ego.x, ego.y)
+        ahead = w.light_stop_route_s[None, :] - (s + w.ego_dims[0] / 2)[:, None]  # (N, L)
+        governs = np.isfinite(ahead) & (ahead > -LIGHT_PASSED_M)
+        selected = np.where(governs.any(axis=1),
+                            np.argmin(np.where(governs, ahead, np.inf), axis=1), -1)
+        detected = governs & (np.arange(nl)[None, :] == selected[:, None])
+        true_color = sim_light_to_tl(colors)
+        sx = w.light_stop_xy[:, 0] - ego.x[:, None]
+        sy = w.light_stop_xy[:, 1] - ego.y[:, None]
+        return {"tl_detected": detected,
+                "tl_color": np.where(detected, true_color, TL_UNKNOWN),
+                "tl_confidence": detected.astype(np.float64),
+                "tl_distance": np.hypot(sx, sy), "tl_selected": selected}
+
+
+class PerfectPrediction:
+    """Forecasts the perceived obstacles with their true futures (see the module doc)."""
+
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+        self.world = world
+        self.horizon = params["prediction.horizon_s"]
+        self.time_step = params["prediction.time_step_s"]
+        self.probability = params["prediction.trajectory_probability"]
+        self.friction = road_friction(world.weather[:, 1])
+        k = np.arange(1, MAX_POINTS + 1)
+        self.t = k[None, :] * self.time_step[:, None]  # (N, K) as the real module's grid
+        self.valid = self.t <= self.horizon[:, None] + 1e-9
+        last = float(np.where(self.valid, self.t, 0.0).max())
+        #: simulation steps a forecast spans (the rollout window holds steps + 1 samples)
+        self.steps = max(1, int(np.ceil(last / world.dt_s - 1e-9)))
+        # (N, steps + 1) samples within each variant's horizon (for the static test)
+        self.in_horizon = (np.arange(self.steps + 1)[None, :] * world.dt_s
+                           <= self.horizon[:, None] + 1e-9)
+        self.reactive = bool(world.actor_reactive.any())
+        self._preroll: tuple[np.ndarray, ...] | None = None
+        self._preroll_tick = 0
+
+    def _rollout(self, start: ActorState, tick: int, ego: VehicleState, steps: int
+                 ) -> tuple[np.ndarray, ...]:
+        """Actor bodies (N, A, steps + 1) x, y, yaw, speed from ``start`` at step ``tick``;
+        the ego a ghost that keeps its speed and course."""
+        w = self.world
+        dt = w.dt_s
+        out = [np.empty((*start.body.x.shape, steps + 1)) for _ in range(4)]
+        state = start
+        vx, vy = ego.speed * np.cos(ego.course), ego.speed * np.sin(ego.course)
+        for i in range(steps + 1):
+            b = state.body
+            for arr, value in zip(out, (b.x, b.y, b.yaw, b.speed), strict=True):
+                arr[..., i] = value
+            if i < steps:
+                ghost = VehicleState(ego.x + vx * (i * dt), ego.y + vy * (i * dt), ego.yaw,
+                                     ego.course, ego.speed)
+                state = step_actors(w, state, (tick + i) * dt, ghost, self.friction)
+        return tuple(out)
+
+    def _future(self, tick: int, actors: ActorState, ego: VehicleState
+                ) -> tuple[np.ndarray, ...]:
+        """True actor bodies over the forecast window (N, A, steps + 1) from this step.
+
+        Actors that do not react to traffic move the same whatever the ego does, so one
+        rollout from the first step serves the whole run (the sim steps them with the same
+        operations on the same values: their forecast is bit-identical to what happens);
+        with reactive actors in the batch, each step rolls forward from the current state."""
+        w = self.world
+        if self.reactive:
+            return self._rollout(actors, tick, ego, self.steps)
+        if self._preroll is None:
+            self._preroll = self._rollout(actors, tick, ego, w.num_ticks - tick + self.steps)
+            self._preroll_tick = tick
+        i = tick - self._preroll_tick
+        return tuple(a[..., i:i + self.steps + 1] for a in self._preroll)
+
+    def step(self, tick: int, per: PerceptionOutput, actors: ActorState, ego: VehicleState
+             ) -> PredictionOutput:
+        w = self.world
+        n, m = per.x.shape
+        na = actors.body.x.shape[1]
+        x, y, vx, vy, _, _, heading, speed = perceived_world_state(per)
+        fx, fy, fyaw, fv = self._future(tick, actors, ego)
+        # sample the rollout at the forecast times (linear between simulation steps)
+        f = clip(self.t / w.dt_s, 0.0, self.steps - 1e-6)  # (N, K)
+        i = f.astype(np.int64)
+        u = f - i
+        rn = np.arange(n)[:, None, None]
+        ra = np.arange(na)[None, :, None]
+        ii, uu = i[:, None, :], u[:, None, :]
+
+        def at(a: np.ndarray) -> np.ndarray:
+            return a[rn, ra, ii] + uu * (a[rn, ra, ii + 1] - a[rn, ra, ii])
+
+        moving = np.where(self.in_horizon[:, None, :], fv, 0.0).max(-1) >= STILL_SPEED_MPS
+        kk = self.t.shape[1]
+        traj_x = np.repeat(x[..., None], kk, axis=-1)
+        traj_y = np.repeat(y[..., None], kk, axis=-1)
+        traj_h = np.repeat(heading[..., None], kk, axis=-1)
+        traj_v = np.zeros((n, m, kk))
+        is_static = np.ones((n, m), dtype=bool)
+        if na:
+            is_static[:, :na] = ~moving
+            mv = moving[..., None]
+            traj_x[:, :na] = np.where(mv, at(fx), traj_x[:, :na])
+            traj_y[:, :na] = np.where(mv, at(fy), traj_y[:, :na])
+            traj_h[:, :na] = np.where(mv, wrap_angle(fyaw[rn, ra, ii]), traj_h[:, :na])
+            traj_v[:, :na] = np.where(mv, at(fv), 0.0)
+        return PredictionOutput(
+            published=per.published, x=x, y=y, heading=heading, vx=vx, vy=vy, speed=speed,
+            length=per.length, width=per.width, type=per.type, track_id=per.track_id,
+            is_static=is_static, intent=np.where(is_static, INTENT_STATIONARY, INTENT_UNKNOWN),
+            traj_x=traj_x, traj_y=traj_y, traj_heading=traj_h, traj_v=traj_v,
+            traj_t=self.t, traj_valid=self.valid, probability=self.probability,
+            horizon=self.horizon, perception=per,
+        )
