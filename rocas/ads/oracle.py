@@ -221,8 +221,8 @@ class PerfectPrediction:
         x, y, vx, vy, _, _, heading, speed = perceived_world_state(per)
         fx, fy, fyaw, fv = self._future(tick, actors, ego)
         # sample the rollout at the forecast times (linear between simulation steps)
-        f = clip(self.t / w.dt_s, 0.0, self.steps - 1e-6)  # (N, K)
-        i = f.astype(np.int64)
+        f = clip(self.t / w.dt_s, 0.0, float(self.steps))  # (N, K)
+        i = np.minimum(f.astype(np.int64), self.steps - 1)
         u = f - i
         rn = np.arange(n)[:, None, None]
         ra = np.arange(na)[None, :, None]
