@@ -69,6 +69,10 @@ SUBSTITUTABLE = ("perception", "prediction")
 LIGHT_PASSED_M = 1.0
 #: An obstacle whose true speed stays below this over the forecast horizon is static [m/s].
 STILL_SPEED_MPS = 0.05
+#: Margin around the region where a reactive actor takes the ego for a leader [m].
+GHOST_MARGIN_M = 2.0
+#: Reuse a reactive rollout while the ego cannot have influenced it (off: roll every step).
+REUSE_ROLLOUTS = True
 
 
 class PerfectPerception:
@@ -78,7 +82,7 @@ class PerfectPerception:
         self.world = world
         self.brake_threshold = params["perception.brake_threshold"]
         n, a = world.actor_kind.shape
-        self.prev_v: tuple[np.ndarray, np.ndarray] | None = None
+        self.velocity: tuple[np.ndarray, np.ndarray] | None = None
         self.accel = (np.zeros((n, a)), np.zeros((n, a)))
 
     def observe(self, actors: VehicleState) -> None:
@@ -86,18 +90,18 @@ class PerfectPerception:
         velocity over the last step."""
         vx = actors.speed * np.cos(actors.course)
         vy = actors.speed * np.sin(actors.course)
-        if self.prev_v is not None:
+        if self.velocity is not None:
             dt = self.world.dt_s
-            self.accel = ((vx - self.prev_v[0]) / dt, (vy - self.prev_v[1]) / dt)
-        self.prev_v = (vx, vy)
+            self.accel = ((vx - self.velocity[0]) / dt, (vy - self.velocity[1]) / dt)
+        self.velocity = (vx, vy)
 
     def step(self, t: float, ego: VehicleState, actors: VehicleState, gt: ObstacleFrame,
              light_colors: np.ndarray, loc: LocalizationOutput) -> PerceptionOutput:
         n, m = gt.x.shape
         na = actors.x.shape[1]
         zeros_obj = np.zeros((n, m - na))
-        vx = np.concatenate([self.prev_v[0], zeros_obj], 1)
-        vy = np.concatenate([self.prev_v[1], zeros_obj], 1)
+        vx = np.concatenate([self.velocity[0], zeros_obj], 1)
+        vy = np.concatenate([self.velocity[1], zeros_obj], 1)
         ax = np.concatenate([self.accel[0], zeros_obj], 1)
         ay = np.concatenate([self.accel[1], zeros_obj], 1)
         # the ego frame of the localization estimate, as the real module publishes
@@ -174,44 +178,90 @@ class PerfectPrediction:
         self.in_horizon = (np.arange(self.steps + 1)[None, :] * world.dt_s
                            <= self.horizon[:, None] + 1e-9)
         self.reactive = bool(world.actor_reactive.any())
-        self._preroll: tuple[np.ndarray, ...] | None = None
-        self._preroll_tick = 0
+        self._tick0 = 0
+        self._states: list[ActorState] = []    # the rollout: state k is at step _tick0 + k
+        self._touched: list[bool] = []         # step k's ghost was near a reactive actor
+
+    def _ghost(self, ego: VehicleState, steps_ahead: int) -> VehicleState:
+        """The ego ``steps_ahead`` steps on, had it kept its speed and course."""
+        d = ego.speed * (steps_ahead * self.world.dt_s)
+        return VehicleState(ego.x + d * np.cos(ego.course), ego.y + d * np.sin(ego.course),
+                            ego.yaw, ego.course, ego.speed)
+
+    def _near(self, state: ActorState, ghost: VehicleState) -> bool:
+        """Whether the ghost ego is anywhere a reactive actor could take it for a leader
+        (a region wider than :func:`step_actors` looks at, by GHOST_MARGIN_M)."""
+        w = self.world
+        b = state.body
+        dx, dy = ghost.x[:, None] - b.x, ghost.y[:, None] - b.y
+        c, s = np.cos(b.yaw), np.sin(b.yaw)
+        lon, lat = dx * c + dy * s, -dx * s + dy * c
+        reach = (w.actor_dims[..., 1] + w.ego_dims[1]) / 2 + GHOST_MARGIN_M
+        return bool((w.actor_reactive & (lon > -GHOST_MARGIN_M) & (np.abs(lat) < reach)).any())
+
+    def _extend(self, tick0: int, ego: VehicleState, ghost_from: int, count: int) -> None:
+        """Step the cached rollout ``count`` more steps, the ghost counted from ``ghost_from``
+        (the cache index where ``ego`` was taken)."""
+        w = self.world
+        for _ in range(count):
+            k = len(self._states) - 1
+            state = self._states[-1]
+            ghost = self._ghost(ego, k - ghost_from)
+            self._touched.append(self._near(state, ghost))
+            self._states.append(step_actors(w, state, (tick0 + k) * w.dt_s, ghost,
+                                            self.friction))
+
+    @staticmethod
+    def _same(a: ActorState, b: ActorState) -> bool:
+        return all(np.array_equal(getattr(x, f), getattr(y, f))
+                   for x, y in ((a.body, b.body), (a.guide, b.guide))
+                   for f in ("x", "y", "yaw", "course", "speed")) and (
+            np.array_equal(a.s, b.s) and np.array_equal(a.index, b.index))
+
+    def _reactive_future(self, tick: int, actors: ActorState, ego: VehicleState
+                         ) -> list[ActorState]:
+        """States (steps + 1 of them) from this step, the ego a ghost that keeps its speed
+        and course. The rollout of an earlier step is reused when the actors are where it put
+        them and no ghost (its own or this step's) ever came near a reactive actor in the
+        window: then no step of it depended on the ego, and a fresh rollout would give the
+        same bits."""
+        j = tick - self._tick0
+        if REUSE_ROLLOUTS and self._states and 0 <= j < len(self._states) and self._same(
+                self._states[j], actors):
+            self._extend(self._tick0, ego, j, j + self.steps + 1 - len(self._states))
+            window = range(j, j + self.steps)
+            if not any(self._touched[k] or self._near(self._states[k], self._ghost(ego, k - j))
+                       for k in window):
+                return self._states[j:j + self.steps + 1]
+        self._tick0, self._states, self._touched = tick, [actors], []
+        self._extend(tick, ego, 0, self.steps)
+        return self._states
 
     def _rollout(self, start: ActorState, tick: int, ego: VehicleState, steps: int
-                 ) -> tuple[np.ndarray, ...]:
-        """Actor bodies (N, A, steps + 1) x, y, yaw, speed from ``start`` at step ``tick``;
-        the ego a ghost that keeps its speed and course."""
-        w = self.world
-        dt = w.dt_s
-        out = [np.empty((*start.body.x.shape, steps + 1)) for _ in range(4)]
-        state = start
-        vx, vy = ego.speed * np.cos(ego.course), ego.speed * np.sin(ego.course)
-        for i in range(steps + 1):
-            b = state.body
-            for arr, value in zip(out, (b.x, b.y, b.yaw, b.speed), strict=True):
-                arr[..., i] = value
-            if i < steps:
-                ghost = VehicleState(ego.x + vx * (i * dt), ego.y + vy * (i * dt), ego.yaw,
-                                     ego.course, ego.speed)
-                state = step_actors(w, state, (tick + i) * dt, ghost, self.friction)
-        return tuple(out)
+                 ) -> list[ActorState]:
+        """States (steps + 1) from ``start`` at step ``tick``, the ego a ghost."""
+        self._tick0, self._states, self._touched = tick, [start], []
+        self._extend(tick, ego, 0, steps)
+        return self._states
 
     def _future(self, tick: int, actors: ActorState, ego: VehicleState
                 ) -> tuple[np.ndarray, ...]:
-        """True actor bodies over the forecast window (N, A, steps + 1) from this step.
+        """True actor bodies over the forecast window (N, A, steps + 1) x, y, yaw, speed.
 
         Actors that do not react to traffic move the same whatever the ego does, so one
         rollout from the first step serves the whole run (the sim steps them with the same
         operations on the same values: their forecast is bit-identical to what happens);
-        with reactive actors in the batch, each step rolls forward from the current state."""
-        w = self.world
+        with reactive actors in the batch, the rollout starts from the current state
+        (:meth:`_reactive_future`)."""
         if self.reactive:
-            return self._rollout(actors, tick, ego, self.steps)
-        if self._preroll is None:
-            self._preroll = self._rollout(actors, tick, ego, w.num_ticks - tick + self.steps)
-            self._preroll_tick = tick
-        i = tick - self._preroll_tick
-        return tuple(a[..., i:i + self.steps + 1] for a in self._preroll)
+            states = self._reactive_future(tick, actors, ego)
+        else:
+            if not self._states:
+                self._rollout(actors, tick, ego, self.world.num_ticks - tick + self.steps)
+            j = tick - self._tick0
+            states = self._states[j:j + self.steps + 1]
+        return tuple(np.stack([getattr(st.body, f) for st in states], axis=-1)
+                     for f in ("x", "y", "yaw", "speed"))
 
     def step(self, tick: int, per: PerceptionOutput, actors: ActorState, ego: VehicleState
              ) -> PredictionOutput:

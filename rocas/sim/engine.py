@@ -11,13 +11,13 @@ Both are pure functions of picklable inputs: (scenario, parameter overrides, see
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence, Set
 from dataclasses import dataclass
 
 import numpy as np
 
 from rocas.ads.params import ParamSet, stack_params
-from rocas.ads.stack import AdsStack, OracleModules, TickOutputs, output_digest
+from rocas.ads.stack import AdsStack, TickOutputs, output_digest
 from rocas.scenarios.model import Scenario
 from rocas.sim.actors import initial_actors, step_actors
 from rocas.sim.dynamics import VehicleState, bicycle_step
@@ -26,6 +26,8 @@ from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_fricti
 
 MODULE_ORDER = ("localization", "canbus", "perception", "prediction", "planning", "control")
 ParamsLike = Mapping[str, float] | ParamSet | None
+#: modules publishing ground truth: one set of names for every variant, or one set per variant
+OracleModules = Set[str] | Sequence[Set[str]]
 
 
 @dataclass(frozen=True, eq=False)

@@ -121,3 +121,32 @@ def test_oracle_masks_per_variant():
     assert set(masks) == set(SUBSTITUTABLE)
     assert masks["perception"].tolist() == [False, False]
     assert masks["prediction"].tolist() == [False, True]
+
+
+def test_reactive_rollouts_are_reused_only_when_the_ego_cannot_matter(monkeypatch):
+    # A9's truck keeps a distance (reactive): its forecast is rolled forward from its current
+    # state; reusing an earlier rollout must give the same bits as rolling at every step
+    import dataclasses
+
+    from rocas.ads import oracle
+
+    sc = dataclasses.replace(entry("A9").scenario, duration_s=6.0)
+    step = oracle.step_actors
+    calls = {}
+    runs = {}
+    for reuse in (True, False):
+        count = [0]
+
+        def counted(*args, _count=count, **kwargs):
+            _count[0] += 1
+            return step(*args, **kwargs)
+
+        monkeypatch.setattr(oracle, "REUSE_ROLLOUTS", reuse)
+        monkeypatch.setattr(oracle, "step_actors", counted)
+        runs[reuse] = simulate_batch(sc, oracle_modules=frozenset({"prediction"}),
+                                     track_outputs=True)
+        calls[reuse] = count[0]
+    assert compile_batch([sc], [sc.seed]).actor_reactive.any()
+    assert np.array_equal(runs[True].ego, runs[False].ego)
+    assert np.array_equal(runs[True].digests, runs[False].digests)
+    assert calls[True] < calls[False] / 2
