@@ -8,17 +8,22 @@ from rocas.scenarios.catalog import accident_matches, entries, entry
 from rocas.sim.engine import simulate_batch
 
 
-def test_the_baseline_is_the_accident_as_simulated():
+@pytest.fixture(scope="module")
+def a10():
+    return second_opinion(entry("A10").scenario)
+
+
+def test_the_baseline_is_the_accident_as_simulated(a10):
     e = entry("A10")
-    op = second_opinion(e.scenario)
+    op = a10
     assert op.baseline == simulate_batch(e.scenario).outcomes[0]
     assert accident_matches(e.truth, op.baseline)
     assert [r.modules for r in op.runs] == [("perception",), ("prediction",),
                                             ("perception", "prediction")]
 
 
-def test_ground_truth_perception_removes_a_misread_light():
-    op = second_opinion(entry("A10").scenario)
+def test_ground_truth_perception_removes_a_misread_light(a10):
+    op = a10
     assert op.module == "perception"
     assert op.run("perception").avoided and not op.run("prediction").avoided
     assert op.cleared == ("prediction",)
