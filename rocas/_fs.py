@@ -47,15 +47,29 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 
 def check_writable(path: str | os.PathLike[str]) -> None:
-    """Fail now, not after a long job, if ``path`` cannot be written atomically.
+    """Fail now, not after a long job, if a file the user named cannot be written atomically.
 
-    Creates (and removes) the temporary sibling the real write will use; any folder it had
-    to create stays.
+    The folder must exist (a mistyped ``-o /nonexistent/dir/out`` is refused, not created);
+    creates (and removes) the temporary sibling the real write will use.
 
     Raises:
-        OutputError: as :func:`atomic_path`.
+        OutputError: the folder does not exist, or as :func:`atomic_path`.
     """
+    check_parent_exists(path)
     _temporary_beside(Path(path)).unlink()
+
+
+def check_parent_exists(path: str | os.PathLike[str]) -> None:
+    """Refuse an output (file or directory) the user named whose folder does not exist.
+
+    Raises:
+        OutputError: the folder of ``path`` is missing or is not a directory.
+    """
+    parent = Path(path).parent
+    if not parent.is_dir():
+        what = "is not a directory" if parent.exists() else "does not exist"
+        raise OutputError(f"cannot write {path}: the folder {parent} {what}",
+                          f"create it first (mkdir -p {parent}) or choose another place")
 
 
 def refuse_overwriting(source: str | os.PathLike[str], output: str | os.PathLike[str]) -> None:

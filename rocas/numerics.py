@@ -36,14 +36,15 @@ _LOG_LG = (6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239
            2.222219843214978396e-01, 1.818357216161805012e-01, 1.531383769920937332e-01,
            1.479819860511658591e-01)
 _SQRT2 = 1.41421356237309514547
-_ATAN_HI = (4.63647609000806093515e-01, 7.85398163397448278999e-01, 9.82793723247329054082e-01,
-            1.57079632679489655800e00)
-_ATAN_LO = (2.26987774529616870924e-17, 3.06161699786838301793e-17, 1.39033110312309984516e-17,
-            6.12323399573676603587e-17)
-_ATAN_T = (3.33333333333329318027e-01, -1.99999999998764832476e-01, 1.42857142725034663711e-01,
-           -1.11111104054623557880e-01, 9.09088713343650656196e-02, -7.69187620504482999495e-02,
-           6.66107313738753120669e-02, -5.83357013379057348645e-02, 4.97687799461593236017e-02,
-           -3.65315727442169155270e-02, 1.62858201153657823623e-02)
+# atan(k/8) for k = 0..8 as a high part and a low correction (computed to 50 digits)
+_ATAN_EIGHTHS_HI = np.array([
+    0.0, 0.12435499454676144, 0.24497866312686414, 0.35877067027057225, 0.4636476090008061,
+    0.5585993153435624, 0.6435011087932844, 0.7188299996216245, 0.7853981633974483])
+_ATAN_EIGHTHS_LO = np.array([
+    0.0, -3.1253241424539383e-18, 1.0698755618734451e-17, -2.4623815582638635e-17,
+    2.2698777452961687e-17, -5.4556305485916264e-18, 1.5834785051444286e-17,
+    -2.1478388444456983e-17, 3.061616997868383e-17])
+_TINY = 1e-300
 _PI_HI = 3.14159265358979311600e00
 _PI_LO = 1.22464679914735317720e-16
 _PI_2_HI = 1.57079632679489655800e00
@@ -116,58 +117,41 @@ def power(base: np.ndarray | float, exponent: np.ndarray | float) -> np.ndarray:
     return _out(np.asarray(out), scalar)
 
 
+def _arctan_unit(t: np.ndarray) -> np.ndarray:
+    """atan(t) for t in [0, 1]: t = c + d with c = k/8 the nearest eighth, so that
+    atan(t) = atan(c) + atan(u) with u = (t - c) / (1 + c t), |u| <= 1/16, and atan(u) is its
+    Taylor series to u**13 (the next term is below 1e-18 relative)."""
+    k = np.fmin(np.rint(t * 8.0), 8.0)  # fmin: NaN -> 8, whose u is NaN again
+    c = k * 0.125
+    u = (t - c) / (1.0 + c * t)
+    z = u * u
+    q = z * (-1.0 / 3 + z * (1.0 / 5 + z * (-1.0 / 7 + z * (1.0 / 9 + z * (-1.0 / 11 + z / 13)))))
+    i = k.astype(np.intp)
+    return _ATAN_EIGHTHS_HI[i] + ((u + u * q) + _ATAN_EIGHTHS_LO[i])
+
+
 def arctan(x: np.ndarray | float) -> np.ndarray:
-    """Arc tangent in (-pi/2, pi/2), elementwise. Shape: as ``x``."""
+    """Arc tangent in [-pi/2, pi/2], elementwise. Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
     scalar = xa.ndim == 0
     ax = np.abs(xa)
-    # reduce |x| to |t| < 7/16 around one of four anchors atan(0.5), atan(1), atan(1.5), pi/2
-    sel = np.select([ax < 0.4375, ax < 0.6875, ax < 1.1875, ax < 2.4375], [-1, 0, 1, 2], 3)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        t = np.select(
-            [sel == -1, sel == 0, sel == 1, sel == 2],
-            [ax, (2.0 * ax - 1.0) / (2.0 + ax), (ax - 1.0) / (ax + 1.0),
-             (ax - 1.5) / (1.0 + 1.5 * ax)],
-            -1.0 / np.where(ax == 0.0, 1.0, ax))
-    z = t * t
-    w = z * z
-    a = _ATAN_T
-    s1 = z * (a[0] + w * (a[2] + w * (a[4] + w * (a[6] + w * (a[8] + w * a[10])))))
-    s2 = w * (a[1] + w * (a[3] + w * (a[5] + w * (a[7] + w * a[9]))))
-    idx = np.maximum(sel, 0)
-    hi = np.asarray(_ATAN_HI)[idx]
-    lo = np.asarray(_ATAN_LO)[idx]
-    anchored = hi - ((t * (s1 + s2) - lo) - t)
-    out = np.where(sel < 0, t - t * (s1 + s2), anchored)
-    out = np.where(ax == np.inf, _PI_2_HI, out)
-    out = np.copysign(out, xa)
-    out = np.where(np.isnan(xa), np.nan, out)
-    return _out(out, scalar)
+    a = _arctan_unit(np.minimum(ax, 1.0 / np.maximum(ax, _TINY)))  # atan(1/x) = pi/2 - atan(x)
+    a = np.where(ax > 1.0, _PI_2_HI - (a - _PI_2_LO), a)
+    return _out(np.copysign(a, xa), scalar)
 
 
 def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
-    """Angle of the point (x, y) in [-pi, pi], elementwise, with C's signed-zero conventions.
-
-    Shapes broadcast.
-    """
+    """Angle of the point (x, y) in [-pi, pi], elementwise, with C's signed-zero conventions
+    (both infinite: not handled). Shapes broadcast."""
     ya = np.asarray(y, dtype=np.float64)
     xa = np.asarray(x, dtype=np.float64)
     scalar = ya.ndim == 0 and xa.ndim == 0
-    ya, xa = np.broadcast_arrays(ya, xa)
     ay, ax = np.abs(ya), np.abs(xa)
-    steep = ay > ax
-    num = np.where(steep, ax, ay)
-    den = np.where(steep, ay, ax)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(den == 0.0, 0.0, num / np.where(den == 0.0, 1.0, den))
-    both_inf = np.isinf(ax) & np.isinf(ay)
-    ratio = np.where(both_inf, 1.0, ratio)
-    a = arctan(ratio)  # in [0, pi/4]
-    a = np.where(steep, _PI_2_HI - (a - _PI_2_LO), a)
+    den = np.maximum(ax, ay)
+    a = _arctan_unit(np.minimum(ax, ay) / np.maximum(den, _TINY))  # in [0, pi/4]
+    a = np.where(ay > ax, _PI_2_HI - (a - _PI_2_LO), a)
     a = np.where(np.signbit(xa), _PI_HI - (a - _PI_LO), a)
-    out = np.copysign(a, ya)
-    out = np.where(np.isnan(xa) | np.isnan(ya), np.nan, out)
-    return _out(np.asarray(out), scalar)
+    return _out(np.copysign(a, ya), scalar)
 
 
 def tan(x: np.ndarray | float) -> np.ndarray:

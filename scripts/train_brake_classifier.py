@@ -18,7 +18,13 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.ads.classifier import CAMERA_HFOV_RAD, FEATURES, camera_view, mlp_forward
+from rocas.ads.classifier import (
+    CAMERA_HFOV_RAD,
+    FEATURES,
+    brake_worthy,
+    camera_view,
+    mlp_forward,
+)
 from rocas.scenarios.model import COLORS
 
 OUT = Path(__file__).resolve().parents[1] / "rocas" / "ads" / "brake_classifier.npz"
@@ -58,11 +64,9 @@ def synthesize(rng: np.random.Generator, n: int, objects: int = 4
     x = camera_view(bearing, dist, lat_extent, height, rgb, visible, fog, glare)
     # ground truth: the object's footprint reaches into the ego's corridor close ahead
     # (a large object beside the corridor is not a reason to brake, however big it looks)
-    half_y = 0.5 * (width * np.abs(np.cos(yaw)) + length * np.abs(np.sin(yaw)))
-    half_x = 0.5 * (length * np.abs(np.cos(yaw)) + width * np.abs(np.sin(yaw)))
-    in_corridor = (np.abs(lateral) - half_y < 1.0) & (ahead + half_x > 0.0) & (visible > 0)
+    in_corridor = brake_worthy(ahead, lateral, length, width, yaw) & (visible > 0)
     is_red = color_idx == names.index("red")
-    label = (in_corridor & (ahead < 9.0)) | (
+    label = in_corridor | (
         is_red & (visible > 0) & (np.abs(lateral) < 3.5) & (dist < 30.0))
     return x, label.any(axis=1).astype(np.float64)
 

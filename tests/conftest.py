@@ -44,3 +44,20 @@ def red_truck_recording(tmp_path_factory):
     path = tmp_path_factory.mktemp("red_truck") / "roundabout.mcap"
     simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0), output=path)
     return path
+
+
+@pytest.fixture(scope="session")
+def ros2_pair(tmp_path_factory):
+    """A short ROS 2 accident/reference pair written with mcap-ros2-support's Writer, and the
+    ``--cmg`` file a ROS 2 user writes for it; prediction_node deviates first (at 7 s)."""
+    import json
+
+    from ros2_mix import ROS2_CMG, Ros2MixConfig, write_ros2_pair
+
+    out = tmp_path_factory.mktemp("ros2")
+    cfg = Ros2MixConfig(duration_s=12.0, obstacles=6, forecast_points=20, plan_points=30,
+                        deviate_at_s=7.0)
+    acc, ref = write_ros2_pair(out, cfg)
+    cmg = out / "cmg.json"
+    cmg.write_text(json.dumps(ROS2_CMG))
+    return acc, ref, cmg

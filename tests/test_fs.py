@@ -32,7 +32,14 @@ def test_a_full_disk_while_writing_is_an_output_error_and_the_old_file_stays(tmp
     assert [p.name for p in tmp_path.iterdir()] == ["report.json"]
 
 
-def test_check_writable_leaves_no_file_but_makes_the_folder(tmp_path):
-    target = tmp_path / "new" / "out.rrd"
-    check_writable(target)
-    assert (tmp_path / "new").is_dir() and list((tmp_path / "new").iterdir()) == []
+def test_check_writable_leaves_no_file(tmp_path):
+    check_writable(tmp_path / "out.rrd")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_missing_folder_is_refused_not_created(tmp_path):
+    target = tmp_path / "nonexistent" / "dir" / "out.rrd"
+    with pytest.raises(OutputError, match="the folder .*dir does not exist") as info:
+        check_writable(target)
+    assert "mkdir -p" in info.value.hint
+    assert not (tmp_path / "nonexistent").exists()

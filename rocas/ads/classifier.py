@@ -30,6 +30,26 @@ FOG_CONTRAST_LENGTH_M = 25.0  # distance over which fog density 100 removes 63 %
 WEIGHTS_RESOURCE = "brake_classifier.npz"
 
 
+#: The classifier's training truth (what "brake" means): a body whose footprint reaches within
+#: BRAKE_CORRIDOR_MARGIN_M of the ego's axis [m], closer ahead than BRAKE_AHEAD_M [m].
+BRAKE_CORRIDOR_MARGIN_M = 1.0
+BRAKE_AHEAD_M = 9.0
+
+
+def brake_worthy(ahead: np.ndarray, lateral: np.ndarray, length: np.ndarray, width: np.ndarray,
+                 yaw: np.ndarray) -> np.ndarray:
+    """Whether each object is a reason to brake (the unbiased training label), any shape.
+
+    Args:
+        ahead, lateral: the object's centre along and across the ego's axis [m].
+        length, width: its size [m]; yaw: its heading relative to the ego's axis [rad].
+    """
+    half_y = 0.5 * (width * np.abs(np.cos(yaw)) + length * np.abs(np.sin(yaw)))
+    half_x = 0.5 * (length * np.abs(np.cos(yaw)) + width * np.abs(np.sin(yaw)))
+    return ((np.abs(lateral) - half_y < BRAKE_CORRIDOR_MARGIN_M) & (ahead + half_x > 0.0)
+            & (ahead < BRAKE_AHEAD_M))
+
+
 def camera_view(
     bearing: np.ndarray, dist: np.ndarray, lat_extent: np.ndarray, height: np.ndarray,
     rgb: np.ndarray, visible: np.ndarray, fog: np.ndarray, glare: np.ndarray,

@@ -326,6 +326,11 @@ class Perception:
                 "tl_distance": np.hypot(sx, sy), "tl_selected": selected}
 
 
+def sim_light_to_tl(colors: np.ndarray) -> np.ndarray:
+    """TrafficLight.Color codes of simulator light codes (LIGHT_CODES values, any shape)."""
+    return _SIM_TO_TL[colors]
+
+
 def ground_truth(world: BatchWorld, ax: np.ndarray, ay: np.ndarray, ayaw: np.ndarray
                  ) -> ObstacleFrame:
     """Stack actor states (N, A) and the map objects into obstacle slots (N, A + E)."""

@@ -69,6 +69,20 @@ class PredictionOutput:
     perception: PerceptionOutput
 
 
+def perceived_world_state(per: PerceptionOutput) -> tuple[np.ndarray, ...]:
+    """Perceived obstacles in the world frame, each (N, M): x, y [m], vx, vy [m/s], ax, ay
+    [m/s^2], heading [rad], speed [m/s]."""
+    c, s = np.cos(per.ego_heading)[:, None], np.sin(per.ego_heading)[:, None]
+    x = per.ego_x[:, None] + per.x * c - per.y * s
+    y = per.ego_y[:, None] + per.x * s + per.y * c
+    vx = per.vx * c - per.vy * s
+    vy = per.vx * s + per.vy * c
+    ax = per.ax * c - per.ay * s
+    ay = per.ax * s + per.ay * c
+    heading = wrap_angle(per.theta + per.ego_heading[:, None])
+    return x, y, vx, vy, ax, ay, heading, np.hypot(vx, vy)
+
+
 class Prediction:
     def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
         self.world = world
@@ -78,15 +92,7 @@ class Prediction:
         p = self.p
         road = self.world.road
         n, m = per.x.shape
-        c, s = np.cos(per.ego_heading)[:, None], np.sin(per.ego_heading)[:, None]
-        x = per.ego_x[:, None] + per.x * c - per.y * s
-        y = per.ego_y[:, None] + per.x * s + per.y * c
-        vx = per.vx * c - per.vy * s
-        vy = per.vx * s + per.vy * c
-        ax = per.ax * c - per.ay * s
-        ay = per.ax * s + per.ay * c
-        heading = wrap_angle(per.theta + per.ego_heading[:, None])
-        speed = np.hypot(vx, vy)
+        x, y, vx, vy, ax, ay, heading, speed = perceived_world_state(per)
         # relative to the ego now (localization)
         lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
         ex, ey = x - loc.x[:, None], y - loc.y[:, None]

@@ -3,20 +3,28 @@
 Per simulation step: localization and chassis publish; every perception period, perception
 (obstacles, traffic lights, brake signal), prediction and planning run in that order; control
 runs every step on the latest plan; canbus turns the command into actuation.
+
+Module substitution: ``oracle_modules`` names, per variant, modules whose output is replaced by
+ground truth (:mod:`rocas.ads.oracle`); with none named the stack runs exactly as without it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+from collections.abc import Sequence, Set
 from dataclasses import dataclass
 
 import numpy as np
 
 from rocas.ads.control import Control, ControlOutput
 from rocas.ads.localization import Canbus, ChassisOutput, Localization, LocalizationOutput
+from rocas.ads.oracle import SUBSTITUTABLE, PerfectPerception, PerfectPrediction
 from rocas.ads.perception import Perception, PerceptionOutput, ground_truth
 from rocas.ads.planning import Planning, PlanningOutput
 from rocas.ads.prediction import Prediction, PredictionOutput
+from rocas.errors import UsageError
+from rocas.sim.actors import ActorState
 from rocas.sim.dynamics import VehicleState
 from rocas.sim.world import BatchWorld, light_state
 
@@ -35,10 +43,58 @@ class TickOutputs:
     control: ControlOutput
 
 
-class AdsStack:
-    """All modules of the built-in ADS for N variants (``params``: name -> (N,) array)."""
+OracleModules = Set[str] | Sequence[Set[str]]
 
-    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
+
+def oracle_masks(oracle_modules: OracleModules, n: int) -> dict[str, np.ndarray]:
+    """Per substitutable module, (N,) bool: which variants publish its ground truth.
+
+    Args:
+        oracle_modules: one set of module names for every variant, or one set per variant.
+        n: the batch size.
+    """
+    if isinstance(oracle_modules, Set):
+        per_variant: Sequence[Set[str]] = [oracle_modules] * n
+    else:
+        per_variant = list(oracle_modules)
+        if any(isinstance(x, str) for x in per_variant):
+            raise UsageError("oracle_modules: expected a set of module names or one set per "
+                             "variant, got a sequence of strings",
+                             'write frozenset({"perception"}), not ("perception",)')
+    if len(per_variant) != n:
+        raise UsageError(f"oracle_modules: got {len(per_variant)} sets for {n} variants")
+    for names in per_variant:
+        unknown = sorted(set(names) - set(SUBSTITUTABLE))
+        if unknown:
+            raise UsageError(f"oracle_modules: {unknown[0]!r} has no ground-truth substitute",
+                             f"substitutable: {', '.join(SUBSTITUTABLE)}")
+    return {m: np.array([m in names for names in per_variant], dtype=bool)
+            for m in SUBSTITUTABLE}
+
+
+def _merge(mask: np.ndarray, oracle: object, real: object | None) -> object:
+    """Rows of ``oracle`` where ``mask`` (N,) holds, of ``real`` elsewhere (same dataclass)."""
+    if real is None or mask.all():
+        return oracle
+    fields = {}
+    for f in dataclasses.fields(real):
+        a, b = getattr(oracle, f.name), getattr(real, f.name)
+        if isinstance(b, np.ndarray):
+            fields[f.name] = np.where(mask.reshape(-1, *(1,) * (b.ndim - 1)), a, b)
+        else:
+            fields[f.name] = b  # the input both were computed from
+    return type(real)(**fields)
+
+
+class AdsStack:
+    """All modules of the built-in ADS for N variants (``params``: name -> (N,) array).
+
+    ``oracle_modules``: modules whose output is replaced by ground truth, one set for every
+    variant or one set per variant (:func:`oracle_masks`); empty by default.
+    """
+
+    def __init__(self, world: BatchWorld, params: dict[str, np.ndarray],
+                 oracle_modules: OracleModules = frozenset()) -> None:
         self.world = world
         self.period_ticks = max(1, int(round(PERCEPTION_PERIOD_S / world.dt_s)))
         period = self.period_ticks * world.dt_s
@@ -50,18 +106,42 @@ class AdsStack:
         self.control = Control(world, params)
         self.plan: PlanningOutput | None = None
         self.plan_time = 0.0
+        self.oracle = {m: mask for m, mask in oracle_masks(oracle_modules,
+                                                           world.batch_size).items()
+                       if mask.any()}
+        self.perfect_perception = (PerfectPerception(world, params)
+                                   if "perception" in self.oracle else None)
+        self.perfect_prediction = (PerfectPrediction(world, params)
+                                   if "prediction" in self.oracle else None)
 
-    def step(self, tick: int, ego: VehicleState, ego_accel: np.ndarray, actors: VehicleState
-             ) -> TickOutputs:
+    def step(self, tick: int, ego: VehicleState, ego_accel: np.ndarray, actors: VehicleState,
+             actor_state: ActorState | None = None) -> TickOutputs:
+        """One simulation step. ``actors`` are the actors' bodies; ``actor_state`` their full
+        state, which only the ground-truth prediction reads (it rolls the actors forward)."""
         t = tick * self.world.dt_s
         loc = self.localization.step(tick, ego, ego_accel)
         chassis = self.canbus.feedback(tick, ego)
+        if self.perfect_perception is not None:
+            self.perfect_perception.observe(actors)
         per = pred = plan = None
         if tick % self.period_ticks == 0 or self.plan is None:
             gt = ground_truth(self.world, actors.x, actors.y, actors.yaw)
-            per = self.perception.step(tick, ego.x, ego.y, ego.yaw, gt,
-                                       light_state(self.world, t), loc)
-            pred = self.prediction.step(per, loc)
+            lights = light_state(self.world, t)
+            mask = self.oracle.get("perception")
+            if mask is None or not mask.all():
+                per = self.perception.step(tick, ego.x, ego.y, ego.yaw, gt, lights, loc)
+            if mask is not None:
+                per = _merge(mask, self.perfect_perception.step(t, ego, actors, gt, lights, loc),
+                             per)
+            mask = self.oracle.get("prediction")
+            if mask is None or not mask.all():
+                pred = self.prediction.step(per, loc)
+            if mask is not None:
+                if actor_state is None:
+                    raise UsageError("the ground-truth prediction needs the actors' full state "
+                                     "(actor_state)")
+                pred = _merge(mask, self.perfect_prediction.step(tick, per, actor_state, ego),
+                              pred)
             plan = self.planning.step(pred, per, loc, chassis)
             self.plan, self.plan_time = plan, t
         ctrl = self.control.step(t, self.plan, self.plan_time, loc, chassis)

@@ -30,6 +30,14 @@ that have already left the previous segment's level, in the direction of the cha
 beyond that segment's level by more than three of its standard deviations (a deterministic
 baseline has none, so any departure counts), at most ``smooth_bins // 2`` bins, the most the
 running median can delay an edge.
+
+A change point PELT places is then judged against the noise the two runs show *before* it
+(Finding 6 of issue 21: on long noisy pairs PELT found level changes in the noise itself): the
+new segment's level (median of the smoothed series up to the next change point) must differ
+from the level before it (median of the raw series since the last kept change point) by more
+than ``significance`` standard deviations of those raw values. A deterministic stretch
+(standard deviation 0) keeps any change, as before; a change point that fails is dropped and
+its stretch joins the next one's "before".
 """
 
 from __future__ import annotations
@@ -52,6 +60,8 @@ class ChangePointConfig:
         min_size: fewest bins in a segment (1: a one-bin ramp step does not pull the change
             point a bin early; impulses are the median filter's job).
         smooth_bins: width of the running median applied first (odd; 1 = none).
+        significance: how many standard deviations of the raw values before a change point
+            its new level must lie away from theirs (0 keeps every change point PELT finds).
     """
 
     baseline_s: float = 3.0
@@ -60,6 +70,7 @@ class ChangePointConfig:
     penalty: float | None = None
     min_size: int = 1
     smooth_bins: int = 5
+    significance: float = 3.0
 
 
 def median_filter(values: np.ndarray, width: int) -> np.ndarray:
@@ -128,6 +139,7 @@ def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> C
     algo = ruptures.KernelCPD(kernel="linear", min_size=cfg.min_size, jump=1)
     ends = algo.fit(values.reshape(-1, 1)).predict(pen=penalty)
     idx = _onsets(raw, values, [int(e) for e in ends[:-1]], cfg.smooth_bins // 2)  # last end: len
+    idx = _significant(raw, values, idx, cfg.significance)
     return ChangePoints(tuple(float(times_s[i]) for i in idx), idx, penalty, std)
 
 
@@ -152,3 +164,27 @@ def _onsets(raw: np.ndarray, smooth: np.ndarray, ends: list[int], reach: int) ->
             j -= 1
         out.append(j)
     return tuple(out)
+
+
+def _significant(raw: np.ndarray, smooth: np.ndarray, idx: tuple[int, ...],
+                 significance: float) -> tuple[int, ...]:
+    """The change points whose new level stands out of the noise before them (module docstring).
+
+    Args:
+        raw: (n,) the series; smooth: (n,) after the running median; idx: change point
+        indices (ascending).
+    """
+    if significance <= 0:
+        return idx
+    kept: list[int] = []
+    for i, k in enumerate(idx):
+        start = kept[-1] if kept else 0
+        stop = idx[i + 1] if i + 1 < len(idx) else len(raw)
+        before, after = raw[start:k], smooth[k:stop]
+        if len(before) < 2 or len(after) == 0:
+            kept.append(k)
+            continue
+        shift = abs(float(np.median(after)) - float(np.median(before)))
+        if shift > significance * float(np.std(before)) + 1e-12:
+            kept.append(k)
+    return tuple(kept)

@@ -19,9 +19,10 @@ The CMG JSON format::
      "control_channel": "/control"}            # optional
 
 ``rocas cmg REC --format json`` prints this format plus the informational keys
-``"channels"`` (per-channel sources), ``"recording"``, ``"control_source"``, ``"notes"`` and
-``"hints"``; they are accepted and ignored when the file is read back as ``--cmg``, so the
-output feeds straight back in. Any other key is refused (it is most likely a typo).
+``"channels"`` (per-channel sources), ``"recording"``, ``"control_source"``, ``"notes"``,
+``"hints"``, ``"warnings"`` and ``"complete"``; they are accepted and ignored when the file
+is read back as ``--cmg``, so the output feeds straight back in.
+Any other key is refused (it is most likely a typo).
 """
 
 from __future__ import annotations
@@ -155,7 +156,8 @@ def load_cmg(path: str | os.PathLike[str]) -> CmgSpec:
 
 
 # keys ``rocas cmg --format json`` adds to the --cmg format; read back, they are ignored
-INFORMATIVE_KEYS = frozenset({"channels", "recording", "control_source", "notes", "hints"})
+INFORMATIVE_KEYS = frozenset({"channels", "recording", "control_source", "notes", "hints",
+                              "warnings", "complete"})
 
 
 def parse_cmg(data: Any, origin: str = "<cmg>") -> CmgSpec:

@@ -27,6 +27,19 @@ from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
 
 REORDER_WINDOW_S = 1.0  # how far out of log-time order a message may be written for one pass [s]
+#: Bins at the start of each channel, with messages in both recordings, over which two runs
+#: of the same thing must still agree (the paper's premise: a deviation comes later).
+START_BINS = 10
+#: Largest median, over shared channels, of the mean MDR in those bins for a pair diffed
+#: without a warning. Two runs of one catalog scenario measure at most 0.07 (the demo pair 0),
+#: two different catalog accidents 0.33 to 0.61; a stack whose headers carry wall-clock
+#: stamps measures more (tests/foreign_stack.py: 0.38), so this alone only warns.
+MAX_START_MDR = 0.2
+#: Relative difference of the two spans above which a pair that already differs at the
+#: start is refused as two different drives [fraction of the longer span].
+MAX_SPAN_DIFFERENCE = 0.05
+#: Shortest/longest span of the two recordings below which the pair gets a warning.
+MIN_SPAN_RATIO = 0.5
 
 
 @dataclass(frozen=True)
@@ -91,11 +104,18 @@ class DiffResult:
     def control_channel(self) -> str:
         return self.pinpoint.control_channel
 
+    @property
+    def complete(self) -> bool:
+        """Whether the answer used the whole of both recordings and nothing in them needed a
+        warning (False whenever :attr:`warnings` has a line)."""
+        return not self.warnings
+
     def to_json(self) -> dict[str, Any]:
         """The ``--json`` object (keys documented in docs/cli.md)."""
         p = self.pinpoint
         return {
             "deviating_module": p.deviating_module,
+            "complete": self.complete,
             "control_channel": p.control_channel,
             "path": list(p.path),
             "delta_s": self.delta_s,
@@ -202,6 +222,7 @@ def diff(
     rtol: float = 0.0,
     change_points: ChangePointConfig | None = None,
     strict_bins: bool = False,
+    allow_unrelated: bool = False,
 ) -> DiffResult:
     """Diff two recordings channel by channel and find the initial deviating module.
 
@@ -217,9 +238,12 @@ def diff(
         rtol: relative tolerance for floating-point leaves.
         change_points: change point detection settings.
         strict_bins: pair messages only within their own bin (no adjacent-bin pairing).
+        allow_unrelated: diff a pair that does not look like two runs of the same thing
+            (:func:`check_pair`) with a warning instead of refusing it.
 
     Raises:
-        InputError: unreadable recordings or CMG file, schema mismatches.
+        InputError: unreadable recordings or CMG file, schema mismatches, a pair that is not
+            two runs of the same thing, a recording without a stretch of time to compare.
         TopologyError: no topology, or no control channel.
     """
     if not bin_s > 0:
@@ -233,6 +257,11 @@ def diff(
     decoders = DecoderCache()
     rec_a: Recording = open_recording(accident, decoders)
     rec_b: Recording = open_recording(reference, decoders)
+    for chosen, origin in ((control_channel_topic, "--control-channel"),
+                           (spec and spec.control_channel, spec and spec.path)):
+        if chosen:
+            _refuse_unknown_channel_early(chosen, str(origin), rec_a, rec_b, both_names=(
+                f"{accident} or {reference}"))
 
     res = compute_series(
         rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
@@ -269,6 +298,9 @@ def diff(
         spec = spec.restricted_to(recorded)
     graph = build_cmg(channel_infos, spec, where=both)
     ctrl = control_channel(graph, control_channel_topic, spec, where=both)
+    pair_warnings = check_pair(res, str(accident), str(reference), cfg,
+                               allow_unrelated=allow_unrelated,
+                               intact=rec_a.report.intact and rec_b.report.intact)
 
     rows: list[ChannelDiff] = []
     t_star: dict[str, float | None] = {}
@@ -292,6 +324,7 @@ def diff(
         )
     pin = find_initial_module(graph, t_star, ctrl, delta_s)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
+    warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note
     warnings += tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
@@ -315,3 +348,102 @@ def diff(
         messages_read=res.messages_read,
         warnings=warnings,
     )
+
+
+def _refuse_unknown_channel_early(
+    topic: str, origin: str, rec_a: Recording, rec_b: Recording, both_names: str
+) -> None:
+    """Refuse a control channel that neither recording's summary lists, before reading them.
+
+    Only summaries that pass their checks are consulted; without them the check happens
+    after the pass, as before.
+    """
+    listed: set[str] = set()
+    for rec in (rec_a, rec_b):
+        summary, _ = rec.summary()
+        if summary is None or not summary.channels:
+            return
+        listed |= {ch.topic for ch in summary.channels.values()}
+    if topic not in listed:
+        raise TopologyError(
+            f"control channel {topic!r} (from {origin}) is not in {both_names}",
+            f"choose one of: {', '.join(sorted(listed))}",
+        )
+
+
+def check_pair(
+    res: Any, accident: str, reference: str, cfg: ChangePointConfig, *,
+    allow_unrelated: bool = False, intact: bool = True,
+) -> tuple[str, ...]:
+    """Check that two recordings are two runs of the same thing; returns warning lines.
+
+    Refused (RecordingError): a recording whose messages all share one log time (no stretch
+    of time to compare); a pair sharing fewer than half of their channels; a pair whose
+    shared channels already differ at the start (the median, over shared channels, of the
+    mean MDR in each channel's first :data:`START_BINS` bins with messages in both
+    recordings is over :data:`MAX_START_MDR`: runs of one scenario agree there, aligned at
+    their first messages) *and* whose spans differ by more than :data:`MAX_SPAN_DIFFERENCE`.
+    ``allow_unrelated`` turns those two refusals into warnings. Warned: a pair that differs
+    at the start with equal spans (wall-clock stamps in headers look like that too), spans
+    that differ by more than :data:`MIN_SPAN_RATIO`, a recording shorter than the change
+    points' baseline window.
+
+    Args:
+        res: the pair's :class:`~rocas.analysis.series.SeriesResult`.
+        intact: both recordings were read whole (a damaged one's span says nothing about the
+            drive, so the spans then refuse nothing).
+    """
+    out: list[str] = []
+    names = (accident, reference)
+    for path, span, n in zip(names, res.span_s, res.messages_read, strict=True):
+        if span <= 0:
+            raise RecordingError(
+                f"{path} holds {n} readable message{'s' if n != 1 else ''}, all at one log "
+                "time: there is no run over time to compare",
+                "diff recordings that cover the drive up to the accident",
+            )
+        if span < cfg.baseline_s:
+            out.append(
+                f"{path} covers only {span:.2f} s, less than the {cfg.baseline_s:g} s baseline "
+                "the change points are judged against"
+            )
+    short, long_ = sorted(res.span_s)
+    if short < MIN_SPAN_RATIO * long_:
+        out.append(
+            f"{accident} covers {res.span_s[0]:.1f} s and {reference} {res.span_s[1]:.1f} s: past "
+            f"{short:.1f} s one recording's messages are compared with nothing"
+        )
+    refuse: list[str] = []
+    topics = res.channels
+    shared = [t for t, (a, b) in topics.items() if a is not None and b is not None]
+    if 2 * len(shared) < len(topics):
+        refuse.append(f"they share only {len(shared)} of their {len(topics)} channels")
+    start_mdr = []
+    for t in shared:
+        s = res.series[t]
+        both = (s.messages[:, 0] > 0) & (s.messages[:, 1] > 0)
+        if both.any():
+            start_mdr.append(float(s.mdr[both][:START_BINS].mean()))
+    median = float(np.median(start_mdr)) if start_mdr else 0.0
+    if median > MAX_START_MDR:
+        differ = (f"at the start, where two runs of one scenario agree, their shared channels "
+                  f"already differ (median MDR {median:.2f} over each channel's first "
+                  f"{START_BINS} bins, more than {MAX_START_MDR:g})")
+        if intact and long_ - short > MAX_SPAN_DIFFERENCE * long_:
+            refuse.append(f"{differ}, and they cover {res.span_s[0]:.2f} s and "
+                          f"{res.span_s[1]:.2f} s")
+        else:
+            out.append(f"{accident} and {reference} may not be two runs of the same thing: "
+                       f"{differ}; if they are, the difference is sensor noise or wall-clock "
+                       "stamps (--atol/--rtol loosen float fields)")
+    if refuse:
+        what = (f"{accident} and {reference} do not look like two runs of the same thing: "
+                + "; ".join(refuse))
+        if not allow_unrelated:
+            raise RecordingError(
+                what,
+                "diff an accident against a run of the same scenario, or pass "
+                "--allow-unrelated to diff these anyway",
+            )
+        out.append(what + " (diffed anyway: --allow-unrelated)")
+    return tuple(out)

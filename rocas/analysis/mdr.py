@@ -14,6 +14,12 @@ floating-point leaves.
 JSON-decoded values follow the same rules: an object is a map (entries ordered by key),
 an array is a repeated node, everything else is a leaf.
 
+ROS 2 messages (decoded by ``rosbags`` into dataclasses that carry ``__msgtype__``) follow
+them too: a message node's children are its declared fields in declaration order, an array
+or sequence field (a list, or a numpy array for primitive element types) is a repeated node
+with one child per element, everything else is a leaf; float32/float64 leaves take the
+tolerance. Two messages of different ROS 2 types score 1.
+
 Two protobuf messages must be instances of the *same* class for the fast paths
 (``a == b`` is evaluated in C); the diff layer guarantees that by decoding both recordings
 of a topic with one class built from their (identical) schema.
@@ -21,11 +27,13 @@ of a topic with one class built from their (identical) schema.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import weakref
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 from google.protobuf.descriptor import Descriptor, FieldDescriptor
 from google.protobuf.message import Message
 
@@ -234,8 +242,75 @@ def _json(a: Any, b: Any, tol: Tolerance) -> float:
     return 0.0 if (type(a) is type(b) and a == b) else 1.0
 
 
+#: ROS 2 message class -> its field names in declaration order
+_ROS2_FIELDS: weakref.WeakKeyDictionary[type, tuple[str, ...]] = weakref.WeakKeyDictionary()
+
+
+def _is_ros2(value: Any) -> bool:
+    return hasattr(value, "__msgtype__") and dataclasses.is_dataclass(value)
+
+
+def _ros2_fields(cls: type) -> tuple[str, ...]:
+    names = _ROS2_FIELDS.get(cls)
+    if names is None:
+        names = _ROS2_FIELDS[cls] = tuple(
+            f.name for f in dataclasses.fields(cls) if f.name != "__msgtype__"
+        )
+    return names
+
+
+def _array(a: np.ndarray, b: np.ndarray, tol: Tolerance) -> float:
+    """A primitive array field: a repeated node of leaves (vectorised)."""
+    n = a.shape[0]
+    if n != b.shape[0]:
+        return 1.0
+    if n == 0:
+        return 0.0
+    if a.dtype.kind == "f" or b.dtype.kind == "f":
+        fa, fb = a.astype(np.float64), b.astype(np.float64)
+        same = (fa == fb) | (np.isnan(fa) & np.isnan(fb))
+        if not tol.exact:
+            finite = np.isfinite(fa) & np.isfinite(fb)
+            with np.errstate(invalid="ignore"):
+                close = np.abs(fa - fb) <= tol.atol + tol.rtol * np.abs(fb)
+            same |= finite & close
+        return float(n - np.count_nonzero(same)) / n
+    return float(np.count_nonzero(a != b)) / n
+
+
+def _ros2_value(va: Any, vb: Any, tol: Tolerance) -> float:
+    if isinstance(va, np.ndarray) and isinstance(vb, np.ndarray):
+        return _array(va, vb, tol)
+    if isinstance(va, list) and isinstance(vb, list):
+        n = len(va)
+        if n != len(vb):
+            return 1.0
+        if n == 0:
+            return 0.0
+        return sum(_ros2_value(x, y, tol) for x, y in zip(va, vb, strict=True)) / n
+    if _is_ros2(va) and _is_ros2(vb):
+        return _ros2(va, vb, tol)
+    if isinstance(va, float) and isinstance(vb, float):
+        return 1.0 if _float_differs(va, vb, tol) else 0.0
+    if type(va) is not type(vb):
+        return 1.0
+    return 0.0 if va == vb else 1.0
+
+
+def _ros2(a: Any, b: Any, tol: Tolerance) -> float:
+    if a.__msgtype__ != b.__msgtype__:
+        return 1.0
+    names = _ros2_fields(type(a))
+    if type(b) is not type(a) and _ros2_fields(type(b)) != names:
+        return 1.0  # one type name, two definitions: the child counts differ
+    if not names:
+        return 0.0
+    return sum(_ros2_value(getattr(a, k), getattr(b, k), tol) for k in names) / len(names)
+
+
 def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
-    """MDR of two decoded messages (protobuf messages of one class, or JSON values).
+    """MDR of two decoded messages (protobuf messages of one class, ROS 2 messages, or JSON
+    values).
 
     Returns:
         A score in [0, 1]: 0 for identical trees, 1 for entirely different ones.
@@ -250,5 +325,9 @@ def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
             b = b2
         return _message(a, b, _plan_for_class(type(a)), tol)
     if isinstance(a, Message) or isinstance(b, Message):
+        return 1.0
+    if _is_ros2(a) and _is_ros2(b):
+        return _ros2(a, b, tol)
+    if _is_ros2(a) or _is_ros2(b):
         return 1.0
     return _json(a, b, tol)

@@ -48,6 +48,10 @@ from rocas.errors import RecordingError
 from rocas.recording.reader import ChannelInfo, DecodedMessage, Recording
 
 ACCIDENT, REFERENCE = 0, 1
+#: Longest stretch of log time one recording may span [s]. A longer one is a clock that
+#: wrapped past 2**64 ns or a corrupted timestamp, never a drive: it is refused, since its
+#: bins (and the reorder window it would need) say nothing about the run.
+MAX_SPAN_S = 30 * 86400.0
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,9 @@ class SeriesResult:
             message read before it in the same file [s]; 0 for a file in log-time order.
         reorder_window_s: the reorder window the result was computed with [s]: the one
             asked for, or a wider one when a file's disorder needed it.
+        span_s: (accident, reference) last minus first log time of the messages read [s].
+        warnings: what the pass found that the result depends on (a summary start time that
+            disagrees with the messages), one line each.
     """
 
     series: dict[str, ChannelSeries]
@@ -143,6 +150,16 @@ class SeriesResult:
     bin_s: float
     disorder_s: tuple[float, float] = (0.0, 0.0)
     reorder_window_s: float = 1.0
+    span_s: tuple[float, float] = (0.0, 0.0)
+    warnings: tuple[str, ...] = ()
+
+
+class _Realign(Exception):
+    """A message lies before the start time the summary gave for its recording."""
+
+    def __init__(self, side: int) -> None:
+        super().__init__(side)
+        self.side = side
 
 
 class _TooLate(Exception):
@@ -169,19 +186,26 @@ def compute_series(
     window wide enough for it (module docstring).
 
     Raises:
-        RecordingError: a topic's schema differs between the two files.
+        RecordingError: a topic's schema differs between the two files, or a recording's log
+            times span more than :data:`MAX_SPAN_S`.
     """
     if not (bin_s > 0 and math.isfinite(bin_s)):
         raise ValueError("bin_s must be a positive number of seconds")
     if not (reorder_window_s > 0 and math.isfinite(reorder_window_s)):
         raise ValueError("reorder_window_s must be a positive number of seconds")
     window_s = reorder_window_s
+    trust_summary = [True, True]
     while True:
         try:
-            return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing)
+            return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
+                             trust_summary)
+        except _Realign as bad:
+            # the summary's start is later than a message: it does not describe these
+            # messages, so the stream aligns itself (the pass then warns)
+            trust_summary[bad.side] = False
         except _TooLate as late:
             # each pass at least doubles the window: once it spans the files' log times
-            # nothing can be late, so the loop ends
+            # nothing can be late, so the loop ends (a span is at most MAX_SPAN_S)
             window_s = max(2.0 * window_s, late.window_s)
 
 
@@ -212,8 +236,10 @@ def _one_pass(
     tolerance: Tolerance,
     window_s: float,
     adjacent_pairing: bool,
+    trust_summary: list[bool],
 ) -> SeriesResult:
-    """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short."""
+    """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short,
+    :class:`_Realign` if a summary's start time is later than a message."""
     window_bins = max(1, math.ceil(window_s / bin_s))
     window_ns = window_bins * bin_s * 1e9
     channels: dict[str, list[ChannelInfo | None]] = {}
@@ -228,15 +254,35 @@ def _one_pass(
 
     streams: list[Iterator[DecodedMessage]] = []
     starts: list[int | None] = []
-    for rec in (accident, reference):
-        stream, start = _aligned(rec.decoded(), rec.summary_start_time_ns(), window_ns)
+    from_summary: list[bool] = []
+    for side, rec in enumerate((accident, reference)):
+        listed = rec.summary_start_time_ns() if trust_summary[side] else None
+        stream, start = _aligned(rec.decoded(), listed, window_ns)
         streams.append(stream)
         starts.append(start)
+        from_summary.append(listed is not None)
+    first = [math.inf, math.inf]
+    last = [-math.inf, -math.inf]
+    max_span_ns = MAX_SPAN_S * 1e9
+    recs = (accident, reference)
 
     def bin_of(side: int, msg: DecodedMessage) -> int:
         start = starts[side]
         assert start is not None  # a stream with a message has a start
-        b = math.floor((msg.log_time_ns - start) / bin_ns + 0.5)
+        t = msg.log_time_ns
+        if t < start and from_summary[side]:
+            raise _Realign(side)
+        first[side], last[side] = min(first[side], t), max(last[side], t)
+        if last[side] - first[side] > max_span_ns or abs(t - start) > max_span_ns:
+            lo, hi = min(first[side], start), max(last[side], t)
+            raise RecordingError(
+                f"{recs[side].path}: log times span {(hi - lo) / 86400e9:.4g} days "
+                f"({lo} to {hi} ns): a clock that wrapped past 2^64 ns or a corrupted timestamp, "
+                "not one drive",
+                "check the recording's timestamps with 'mcap info'; rocas compares runs of at "
+                f"most {MAX_SPAN_S / 86400:g} days",
+            )
+        b = math.floor((t - start) / bin_ns + 0.5)
         if b < scored_below:
             # earlier than bins already scored (or than t = 0): a window as wide as this
             # file's disorder so far (plus rounding) holds it
@@ -316,6 +362,11 @@ def _one_pass(
             messages=np.asarray(a.counts, dtype=np.int64).reshape(-1, 2),
             only_in=only,
         )
+    warnings = tuple(
+        f"{rec.path}: the summary section's start time lies after the first message; "
+        "aligned at the earliest message read instead"
+        for side, rec in enumerate(recs) if not trust_summary[side]
+    )
     return SeriesResult(
         series=series,
         channels={t: (p[0], p[1]) for t, p in channels.items()},
@@ -323,6 +374,9 @@ def _one_pass(
         bin_s=bin_s,
         disorder_s=(disorder_ns[0] / 1e9, disorder_ns[1] / 1e9),
         reorder_window_s=window_s,
+        span_s=tuple(  # type: ignore[arg-type]
+            (last[s] - first[s]) / 1e9 if read[s] else 0.0 for s in (ACCIDENT, REFERENCE)),
+        warnings=warnings,
     )
 
 

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from rocas._fs import check_writable
+from rocas._fs import check_parent_exists, check_writable
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
@@ -73,6 +73,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
             raise InputError(f"no such file: {source}", "check the path")
         name = source.stem
     out = Path(args.out) if args.out else Path("runs") / name
+    if args.out:
+        check_parent_exists(out)  # the run directory is made; a mistyped folder above it is not
     if args.rrd:
         check_writable(args.rrd)  # before minutes of work, not after
     progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})

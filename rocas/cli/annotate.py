@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 
+from rocas._fs import check_parent_exists
 from rocas.analysis.cmg import load_cmg
 from rocas.cli.console import Env
 from rocas.errors import TopologyError, UsageError
@@ -34,6 +35,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
             "nothing to annotate",
             "give --cmg FILE (and/or --control-channel TOPIC)",
         )
+    check_parent_exists(args.output)
     spec = load_cmg(args.cmg) if args.cmg else None
     infos, _ = read_channels(args.recording)
     topics = {c.topic for c in infos}

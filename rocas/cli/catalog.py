@@ -14,6 +14,7 @@ import argparse
 import json
 from pathlib import Path
 
+from rocas._fs import check_parent_exists
 from rocas.cli.console import Env
 from rocas.errors import UsageError
 
@@ -90,7 +91,8 @@ def _record(args: argparse.Namespace, env: Env) -> int:
     from rocas.sim.engine import simulate
 
     out_dir = Path(args.directory)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check_parent_exists(out_dir)
+    out_dir.mkdir(exist_ok=True)
     failed = []
     written: list[str] = []
     for e in _selected(args.only):

@@ -24,9 +24,8 @@ from rocas.analysis.cmg import (
     resolve_topology,
 )
 from rocas.cli.console import Env, prose
-from rocas.errors import TopologyError
-from rocas.recording.annotate import read_channels
-from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo
+from rocas.errors import RecordingError, TopologyError
+from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo, open_recording
 
 HELP = "show who writes and reads each channel of a recording, and what is missing"
 
@@ -62,6 +61,7 @@ class CmgView:
         control_source: "--control-channel", "cmg", "metadata" or a reason it is unknown.
         notes: remarks about sources and encodings, one line each.
         hints: what to add, one line each (empty when nothing is missing).
+        warnings: what the reader found (damage, counts that disagree with the summary).
     """
 
     recording: str
@@ -72,20 +72,38 @@ class CmgView:
     control_source: str
     notes: tuple[str, ...]
     hints: tuple[str, ...]
+    warnings: tuple[str, ...] = ()
 
 
 def build_view(
     recording: str, spec: CmgSpec | None, override: str | None, env: Env | None = None
 ) -> CmgView:
-    """Read the recording's channels and explain its topology; warnings go to ``env``."""
-    damage: list[str] = []
-    infos, counts = read_channels(recording, damage)
+    """Read the recording's channels and explain its topology; warnings go to ``env``.
+
+    Every message is read and decoded, as ``rocas diff`` reads them: the counts shown are the
+    messages that decode, and a file that diff cannot read is refused here too.
+
+    Raises:
+        RecordingError: no message of the recording can be read.
+    """
+    rec = open_recording(recording)
+    for _ in rec.decoded():
+        pass
+    damage = rec.report.warnings(recording, skipped_encodings=False)  # the notes explain them
+    infos = list(rec.channels.values())
+    counts = {t: st.messages for t, st in rec.report.channel_stats.items()}
+    if not any(st.messages for st in rec.report.channel_stats.values()):
+        raise RecordingError(
+            f"{recording} holds no readable message" + (f": {damage[0]}" if damage else ""),
+            "check the file with 'mcap info'",
+        )
     if env is not None:
         for line in damage:  # a truncated file lists only what was read before the cut
             env.warn(line)
     by_topic: dict[str, list[ChannelInfo]] = {}
     for ch in infos:
         by_topic.setdefault(ch.topic, []).append(ch)
+        counts.setdefault(ch.topic, 0)
     if spec is not None:
         if env is not None:
             for line in spec.missing_channel_warnings(by_topic, recording):
@@ -124,6 +142,7 @@ def build_view(
         control_source=source,
         notes=tuple(_notes(topology, by_topic)),
         hints=tuple(_hints(recording, topology, control, marked)),
+        warnings=tuple(damage),
     )
 
 
@@ -141,8 +160,8 @@ def _notes(topology: Mapping[str, ChannelTopology],
         odd = [e for e in encodings if e not in DECODABLE_ENCODINGS]
         if odd:
             notes.append(
-                f"{topic} is {'/'.join(odd) or 'unencoded'}: rocas decodes only protobuf and "
-                "json, so 'rocas diff' skips its messages; it stays in the graph"
+                f"{topic} is {'/'.join(odd) or 'unencoded'}: rocas decodes only protobuf, "
+                "json and ROS 2 cdr, so 'rocas diff' skips its messages; it stays in the graph"
             )
     return notes
 
@@ -201,6 +220,8 @@ def to_json(view: CmgView) -> dict[str, object]:
     doc["control_source"] = view.control_source
     doc["notes"] = list(view.notes)
     doc["hints"] = list(view.hints)
+    doc["warnings"] = list(view.warnings)
+    doc["complete"] = not view.warnings
     return doc
 
 

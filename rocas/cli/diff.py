@@ -59,6 +59,9 @@ def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
                    help="pair messages only within their own bin (no adjacent-bin pairing)")
     g.add_argument("--smooth", type=int, default=5, metavar="BINS",
                    help="running-median width applied before PELT (default 5; 1 = off)")
+    g.add_argument("--allow-unrelated", action="store_true",
+                   help="diff a pair that does not look like two runs of the same thing "
+                   "(with a warning) instead of refusing it")
 
 
 def change_point_config(args: argparse.Namespace) -> ChangePointConfig:
@@ -141,6 +144,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         rtol=args.rtol,
         change_points=change_point_config(args),
         strict_bins=args.strict_bins,
+        allow_unrelated=args.allow_unrelated,
     )
     for w in result.warnings:
         env.warn(w)

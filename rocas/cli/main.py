@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -24,7 +26,7 @@ from typing import NoReturn
 from rocas import __version__
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus, exit_status_for
-from rocas.errors import RocasError, Terminated
+from rocas.errors import OutputError, RocasError, Terminated, UsageError
 
 #: Command name -> module under rocas.cli. Modules that are not present are not offered.
 COMMANDS: dict[str, str] = {
@@ -89,6 +91,10 @@ def _add_traceback(p: argparse.ArgumentParser) -> None:
 def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     """Entry point of the console script; returns (and, as a script, exits with) a status."""
     env = env or Env()
+    args_list = sys.argv[1:] if argv is None else list(argv)
+    if args_list == ["--version"]:  # answered before the commands (and numpy) are imported
+        env.stdout.write(f"rocas {__version__}\n")
+        return ExitStatus.SUCCESS
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -100,9 +106,23 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help(env.stderr)
         return ExitStatus.USAGE
+    _rearm_sigint()
     try:
         with _sigterm_interrupts():
-            return int(args._run(args, env))
+            status = int(args._run(args, env))
+            env.stdout.flush()  # a full disk under stdout is an output error, not a bug
+            return status
+    except OSError as exc:
+        if exc.errno not in _OUTPUT_ERRNOS:
+            return _internal(exc, args, env)
+        if args.traceback:
+            traceback.print_exc(file=env.stderr)
+        where = f" {exc.filename}" if exc.filename else " (standard output)"
+        err = OutputError(f"cannot write{where}: {exc.strerror or exc}",
+                          "free some space or write elsewhere")
+        env.error(str(err))
+        _silence_stdout(env)
+        return exit_status_for(err)
     except KeyboardInterrupt as exc:
         if args.traceback:
             traceback.print_exc(file=env.stderr)
@@ -112,18 +132,52 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     except RocasError as exc:
         if args.traceback:
             traceback.print_exc(file=env.stderr)
-        env.error(str(exc))
+        if isinstance(exc, UsageError) and exc.hint is None:  # an option error: where to look
+            env.error(f"{exc} (see 'rocas {args.command} --help')")
+        else:
+            env.error(str(exc))
         return exit_status_for(exc)
     except BrokenPipeError:
         return ExitStatus.SUCCESS
     except Exception as exc:  # a bug: say so in one line, full story with --traceback
-        if args.traceback:
-            traceback.print_exc(file=env.stderr)
-        env.error(
-            f"internal error: {type(exc).__name__}: {exc} "
-            "(this is a bug in rocas; rerun with --traceback and report it)"
-        )
-        return ExitStatus.INTERNAL
+        return _internal(exc, args, env)
+
+
+#: errno values that mean an output could not be written (a full disk, a quota, a file too
+#: large, a read-only file system): exit 5 with what to do, never "report a bug".
+_OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS})
+
+
+def _internal(exc: BaseException, args: argparse.Namespace, env: Env) -> int:
+    if args.traceback:
+        traceback.print_exc(file=env.stderr)
+    env.error(
+        f"internal error: {type(exc).__name__}: {exc} "
+        "(this is a bug in rocas; rerun with --traceback and report it)"
+    )
+    return ExitStatus.INTERNAL
+
+
+def _silence_stdout(env: Env) -> None:
+    """After stdout failed to flush, point it at /dev/null so that the interpreter's own
+    flush at exit does not print a second error."""
+    if env.stdout is sys.stdout:
+        with contextlib.suppress(OSError, ValueError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
+
+
+def _rearm_sigint() -> None:
+    """Make Ctrl-C (SIGINT) stop rocas even when it was started ignoring it.
+
+    A non-interactive shell starts ``cmd &`` with SIGINT ignored, and Python keeps an ignored
+    signal ignored; rocas then could not be interrupted. Only the main thread can do this.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @contextlib.contextmanager

@@ -11,6 +11,24 @@ from rocas.errors import UsageError
 HELP = "list the built-in ADS's parameters (default, range, unit, description)"
 
 
+def parse_set_options(assignments: list[str], command: str) -> dict[str, float]:
+    """The ``--set MODULE.PARAM=VALUE`` options of ``rocas <command>`` as overrides.
+
+    A malformed option or an unknown parameter is a usage error (exit 2), not bad input.
+
+    Raises:
+        UsageError: naming the option, with the closest parameter name or where to look.
+    """
+    from rocas.ads.params import parse_assignment
+    from rocas.errors import ScenarioError
+
+    try:
+        return dict(parse_assignment(a) for a in assignments)
+    except ScenarioError as exc:
+        hint = exc.hint or "see 'rocas params'"
+        raise UsageError(exc.message, f"{hint}; 'rocas {command} --help' for the options") from None
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--module", metavar="M",
                    help="only this module (localization, canbus, perception, prediction, "

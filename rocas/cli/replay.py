@@ -33,17 +33,19 @@ def _accident(a: object | None) -> str:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.ads.params import parse_assignment
+    from rocas.cli.params import parse_set_options
     from rocas.replay import replay
 
     if args.output is not None and not str(args.output).endswith(".mcap"):
         raise UsageError(f"output {args.output!r} should end in .mcap")
     if args.output is not None:
         check_writable(args.output)
-    overrides = dict(parse_assignment(a) for a in args.assignments)
+    overrides = parse_set_options(args.assignments, "replay")
     report = replay(args.recording, overrides or None, output=args.output)
     rec = report.reconstruction
     assert rec is not None
+    for line in rec.warnings:  # damage: in JSON mode too (and in the JSON's "warnings")
+        env.warn(line)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2), file=env.stdout)
     else:
@@ -61,7 +63,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if report.output:
             print(f"  replay recorded to {report.output}", file=out)
         for note in rec.notes:
-            env.warn(note)
+            if note not in rec.warnings:
+                env.warn(note)
     if not report.reproduced and not overrides:
         raise NotReproducedError(
             f"replay of {args.recording} did not reproduce the recorded accident "

@@ -32,7 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, env: Env) -> int:
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from rocas.ads.params import parse_assignment
+    from rocas.cli.params import parse_set_options
     from rocas.scenarios import resolve_scenario
     from rocas.sim.engine import simulate
 
@@ -46,7 +46,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if not 0 < args.duration <= 600:
             raise UsageError("--duration must be in (0, 600] seconds")
         scenario = dataclasses.replace(scenario, duration_s=args.duration)
-    overrides = dict(parse_assignment(a) for a in args.assignments)
+    overrides = parse_set_options(args.assignments, "simulate")
     ticks = scenario.num_ticks
     if args.no_progress:
         result = simulate(scenario, overrides, args.seed, output=args.output)

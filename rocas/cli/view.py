@@ -1,7 +1,9 @@
 """``rocas view RUN_DIR | RECORDING.mcap``: the Rerun visual debugger.
 
-Opens the native viewer when a display is available; with ``--web`` (or without a display)
-serves Rerun's web viewer on localhost and prints its address until Ctrl-C. ``--rrd`` also
+Opens the native viewer when a display is available (it is given a file it may read whenever
+it likes: rocas never removes it under the viewer, and says whether the viewer started or
+failed); with ``--web`` (or without a display) serves Rerun's web viewer on localhost and
+prints its address until Ctrl-C. ``--rrd`` also
 writes the recording (with its default layout) to a file; ``--no-viewer`` only writes it.
 """
 
@@ -60,9 +62,9 @@ def write_rrd(source: Path, out: Path) -> tuple[str, list[str]]:
         if "verdict_md" in contents:
             parts.append("verdict")
         return "; ".join(parts), [w for n in shown for w in contents[n].warnings]
-    ex = write_recording_rrd(out, source)
+    ex, topics = write_recording_rrd(out, source)
     found = ", ".join(f"{k} from {v}" for k, v in ex.sources.items()) or "no scene channels"
-    return f"{found}; {len(ex.channels)} channels plotted", list(ex.warnings)
+    return f"{found}; {len(topics)} channels through Rerun's MCAP importer", list(ex.warnings)
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
@@ -74,12 +76,17 @@ def run(args: argparse.Namespace, env: Env) -> int:
     keep = Path(args.rrd) if args.rrd else None
     if keep is not None:
         check_writable(keep)
+    native = not args.no_viewer and not args.web and has_display()
     tmpdir = None
-    if keep is None:
+    if keep is not None:
+        out = keep
+    elif native:
+        # the viewer reads the file whenever it gets to it: it is left for it, never removed
+        # under it (the system's temporary folder is cleaned as usual)
+        out = Path(tempfile.mkdtemp(prefix="rocas-view-")) / f"{source.stem or 'view'}.rrd"
+    else:
         tmpdir = tempfile.TemporaryDirectory(prefix="rocas-view-")
         out = Path(tmpdir.name) / "view.rrd"
-    else:
-        out = keep
     try:
         summary, warnings = write_rrd(source, out)
         for line in warnings:
@@ -88,41 +95,67 @@ def run(args: argparse.Namespace, env: Env) -> int:
             env.out().print(f"Rerun recording: {keep} ({summary})")
         if args.no_viewer:
             return 0
-        if args.web or not has_display():
+        if not native:
             return _serve_web(out, args, env)
-        _spawn_native(out, args)
-        env.out().print("Opened the Rerun viewer.")
+        pid, running = _spawn_native(out, args)
+        left = "" if keep is not None else f"; it reads {out}, which is left for it"
+        if running:
+            env.out().print(f"Started the Rerun viewer (process {pid}){left}.")
+        else:
+            env.out().print(f"The Rerun viewer (process {pid}) took the file and exited at once "
+                            f"with status 0 (a viewer already open may show it){left}.")
         return 0
     finally:
         if tmpdir is not None:
             tmpdir.cleanup()
 
 
-def _spawn_native(out: Path, args: argparse.Namespace) -> None:
+#: How long a viewer that fails at once (no GPU, a broken install) is waited for [s]; a viewer
+#: still running then is reported as started.
+SPAWN_CHECK_S = 1.0
+
+
+def _spawn_native(out: Path, args: argparse.Namespace) -> tuple[int, bool]:
+    """Start the native viewer on ``out``: its process id, and whether it is still running
+    after :data:`SPAWN_CHECK_S`. Raises if it fails at once."""
     import subprocess
 
     from rocas.errors import RocasError
 
     try:
-        subprocess.Popen(
+        proc = subprocess.Popen(
             ["rerun", "--port", str(args.grpc_port), str(out)],
             start_new_session=True,
             stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
         )
     except FileNotFoundError:
         raise RocasError(
             "the 'rerun' viewer executable is not on PATH",
             hint="pip install rerun-sdk, or use --rrd and open the file elsewhere",
         ) from None
-    if out.parent.name.startswith("rocas-view-"):
-        time.sleep(2.0)  # let the viewer read the temporary file before it is removed
+    try:
+        code = proc.wait(timeout=SPAWN_CHECK_S)
+    except subprocess.TimeoutExpired:
+        if proc.stderr is not None:
+            proc.stderr.close()  # the viewer keeps running on its own
+        return proc.pid, True
+    err = proc.stderr.read().decode(errors="replace").strip() if proc.stderr else ""
+    last = err.splitlines()[-1] if err else "no message"
+    if code == 0:
+        return proc.pid, False
+    raise RocasError(
+        f"the Rerun viewer exited at once with status {code}: {last}",
+        hint="use --web, or --rrd OUT.rrd and open the file elsewhere",
+    )
 
 
 def _serve_web(out: Path, args: argparse.Namespace, env: Env) -> int:
     import rerun as rr
 
-    rec = rr.RecordingStream("rocas", recording_id=f"rocas-view-{out.stem}")
+    from rocas.viz.stream import new_recording_id
+
+    rec = rr.RecordingStream("rocas", recording_id=new_recording_id("view"))
     url = rec.serve_grpc(grpc_port=args.grpc_port)
     rr.serve_web_viewer(web_port=args.web_port, open_browser=False, connect_to=url)
     rec.log_file_from_path(out)

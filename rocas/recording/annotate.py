@@ -54,6 +54,12 @@ _COMPRESSION = {"": CompressionType.NONE, "zstd": CompressionType.ZSTD,
                 "lz4": CompressionType.LZ4}
 _DEFAULT_CHUNK_SIZE = 1 << 20  # [bytes] mcap's default
 
+#: The ``mcap`` CLI repairs damaged files; pip does not install it. What is installed with
+#: rocas (``rerun mcap check``) shows where a file is damaged.
+MCAP_CLI = ("the mcap CLI, a separate download from the foxglove/mcap releases; "
+            "'rerun mcap check FILE', installed with rocas, shows where the damage is")
+REPAIR_HINT = f"repair it with 'mcap recover' first ({MCAP_CLI})"
+
 
 @dataclass(frozen=True)
 class ChannelAnnotation:
@@ -258,7 +264,7 @@ class _Copier:
                 raise RecordingError(
                     f"a message refers to channel id {rec.channel_id}, which is not declared "
                     "before it",
-                    "the file is damaged; repair it with 'mcap recover' first",
+                    "the file is damaged; " + REPAIR_HINT,
                 ) from None
             w.add_message(channel_id=channel_id, log_time=rec.log_time, data=rec.data,
                           publish_time=rec.publish_time, sequence=rec.sequence)
@@ -276,7 +282,7 @@ class _Copier:
                 raise RecordingError(
                     f"channel {rec.topic} refers to schema id {rec.schema_id}, which is not "
                     "declared before it",
-                    "the file is damaged; repair it with 'mcap recover' first",
+                    "the file is damaged; " + REPAIR_HINT,
                 ) from None
             meta = annotated_metadata(
                 rec.metadata, rec.topic, self._annotations.get(rec.topic), self._control
@@ -381,12 +387,12 @@ def annotate_recording(
             raise RecordingError(
                 f"{src} {_damage(exc, done, rec.size, copying, f.tell() >= rec.size)}; "
                 "annotate copies complete recordings only",
-                f"repair it first with 'mcap recover {src} -o FIXED.mcap'",
+                f"repair it first with 'mcap recover {src} -o FIXED.mcap' ({MCAP_CLI})",
             ) from None
         if not ended:
             raise RecordingError(
                 f"{src} ends before its data section is complete",
-                f"repair it first with 'mcap recover {src} -o FIXED.mcap'",
+                f"repair it first with 'mcap recover {src} -o FIXED.mcap' ({MCAP_CLI})",
             )
         if control_channel is not None and control_channel not in copier.topics:
             raise TopologyError(

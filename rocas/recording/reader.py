@@ -13,7 +13,8 @@ still yields everything before and around the damage:
 Decoding needs no generated code: protobuf classes are built from the schema records,
 with one ``mcap_protobuf`` decoder factory per opened file (a shared factory caches
 classes by schema id and would decode a second file with the first file's classes).
-JSON channels are decoded with :func:`json.loads`.
+JSON channels are decoded with :func:`json.loads`, ROS 2 (cdr) channels with ``rosbags``
+(:mod:`rocas.recording.decoding`).
 """
 
 from __future__ import annotations
@@ -31,8 +32,16 @@ from typing import Any
 from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
 from mcap.opcode import Opcode
-from mcap.reader import make_reader
-from mcap.records import Attachment, Channel, Chunk, Message, Metadata, Schema
+from mcap.records import (
+    Attachment,
+    Channel,
+    Chunk,
+    ChunkIndex,
+    Message,
+    Metadata,
+    Schema,
+    Statistics,
+)
 
 from rocas.errors import InputError, RecordingError
 from rocas.recording.decoding import DecoderCache
@@ -56,7 +65,7 @@ _SPEC_OPCODES = frozenset(range(0x01, 0x10))
 # every offset is tried: a false candidate that overlaps a real header must not hide it.
 _CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
-DECODABLE_ENCODINGS = ("protobuf", "json")
+DECODABLE_ENCODINGS = ("protobuf", "json", "cdr")
 
 
 @dataclass(frozen=True)
@@ -131,9 +140,26 @@ class ReadReport:
     unknown_channel_messages: int = 0
     channels_from_summary: bool = False
     channel_stats: dict[str, ChannelStats] = field(default_factory=dict)
+    summary_problem: str | None = None
+    summary_mismatches: list[str] = field(default_factory=list)
 
-    def warnings(self, name: str) -> list[str]:
-        """Human-readable warning lines (without the ``rocas: warning:`` prefix)."""
+    @property
+    def intact(self) -> bool:
+        """Whether the pass read every record to the end, skipped nothing, decoded every message
+        and agreed with the summary section (when the file has one)."""
+        return not (
+            self.truncated or not self.complete or self.skipped_chunks or self.skipped_ranges
+            or self.unknown_channel_messages or self.channels_from_summary
+            or self.summary_problem or self.summary_mismatches
+            or any(st.undecodable for st in self.channel_stats.values())
+        )
+
+    def warnings(self, name: str, skipped_encodings: bool = True) -> list[str]:
+        """Human-readable warning lines (without the ``rocas: warning:`` prefix).
+
+        ``skipped_encodings=False`` leaves out channels skipped for their encoding (for a
+        caller that explains encodings itself).
+        """
         out: list[str] = []
         if self.truncated:
             pct = 100.0 * self.bytes_read / max(self.bytes_total, 1)
@@ -154,16 +180,19 @@ class ReadReport:
                 f"{name}: channel declarations were lost with damaged data; "
                 "recovered them from the file's summary section"
             )
+        if self.summary_problem:
+            out.append(f"{name}: {self.summary_problem}")
+        out.extend(f"{name}: {line}" for line in self.summary_mismatches)
         if self.unknown_channel_messages:
             out.append(
                 f"{name}: {self.unknown_channel_messages} messages reference channels "
                 "that were never declared (lost with a damaged chunk?)"
             )
         for topic, st in sorted(self.channel_stats.items()):
-            if st.skipped_encoding:
+            if st.skipped_encoding and skipped_encodings:
                 out.append(
                     f"{name}: skipped channel {topic}: {st.skipped_encoding} messages in an "
-                    "encoding rocas cannot decode (only protobuf and json are compared)"
+                    "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
                 )
             if st.undecodable:
                 out.append(
@@ -189,7 +218,8 @@ def _check_file(path: Path) -> int:
     if head != MAGIC:
         raise RecordingError(
             f"{path} is not an MCAP file (it does not start with the MCAP magic bytes)",
-            "rocas reads MCAP recordings; convert other formats with the mcap CLI",
+            "rocas reads MCAP recordings; convert ROS bags with 'rosbags-convert --src BAG --dst OUT "
+            "--dst-storage mcap' (installed with rocas; OUT is a folder holding the .mcap)",
         )
     return size
 
@@ -217,6 +247,9 @@ class Recording:
         self._decoder_cache = decoders if decoders is not None else DecoderCache()
         self._scanned = False
         self._summary_channels_tried = False
+        self._summary_read: tuple[Any, str | None] | None = None
+        self._pass_chunks: list[int] = []
+        self.attachment_warnings: list[str] = []
 
     # -- records -----------------------------------------------------------------------
     def _channel_info(self, ch: Channel) -> ChannelInfo:
@@ -259,7 +292,11 @@ class Recording:
             try:
                 yield from self._walk(want_attachments)
             finally:
-                self.report = kept
+                scratch, self.report = self.report, kept
+                self.attachment_warnings = [
+                    line for line in scratch.warnings(str(self.path))
+                    if line not in self.report.warnings(str(self.path))
+                ]
             return
         yield from self._walk(want_attachments)
 
@@ -298,6 +335,8 @@ class Recording:
                     pos = end
                     self.report.bytes_read = pos
                     continue
+                if opcode == Opcode.CHUNK:
+                    self._pass_chunks.append(pos)
                 f.seek(body_start)
                 try:  # no reference kept here: a chunk's stored bytes are freed once inflated
                     yield from self._handle_record(opcode, f.read(length), pos)
@@ -409,6 +448,10 @@ class Recording:
                 return
             elif opcode == Opcode.ATTACHMENT:
                 rec = Attachment.read(stream)
+                (crc,) = struct.unpack_from("<I", body, len(body) - 4)
+                if crc != 0 and zlib.crc32(body[: len(body) - 4]) != crc:
+                    raise _BadRecord(offset, f"attachment {rec.name!r} at offset {offset} fails "
+                                             "its CRC check")
             else:
                 return  # other opcodes (header, indexes, unknown) carry nothing we need
         except (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError) as exc:
@@ -418,11 +461,22 @@ class Recording:
 
     # -- public passes ------------------------------------------------------------------
     def messages(self) -> Iterator[RawMessage]:
-        """Every readable message, in file order (each call is a new pass)."""
+        """Every readable message, in file order (each call is a new pass).
+
+        A pass that reaches the end of the file compares what it read with the summary
+        section's statistics and chunk indexes (:meth:`_check_summary`).
+        """
         self.report = ReadReport(bytes_total=self.size)
+        self._pass_chunks = []
         stats = self.report.channel_stats
+        by_id: dict[int, int] = {}
+        first, last = None, None
         for rec in self._records():
             assert isinstance(rec, Message)
+            by_id[rec.channel_id] = by_id.get(rec.channel_id, 0) + 1
+            t = rec.log_time
+            first = t if first is None or t < first else first
+            last = t if last is None or t > last else last
             ch = self.channels.get(rec.channel_id)
             if ch is None and not self._summary_channels_tried:
                 self._channels_from_summary()
@@ -435,6 +489,8 @@ class Recording:
                 st = stats[ch.topic] = ChannelStats()
             st.messages += 1
             yield RawMessage(ch, rec.log_time, rec.publish_time, rec.sequence, rec.data)
+        if self.report.complete:
+            self._check_summary(by_id, first, last)
 
     def decoded(self, topics: set[str] | None = None) -> Iterator[DecodedMessage]:
         """Every message that decodes, in file order; failures are counted, not raised."""
@@ -471,12 +527,8 @@ class Recording:
         declared it was damaged: a complete file repeats every declaration in its summary.
         """
         self._summary_channels_tried = True
-        try:
-            with open(self.path, "rb") as f:
-                summary = make_reader(f).get_summary()
-        except Exception:  # no or damaged summary: the messages stay unattributed
-            return
-        if summary is None:
+        summary, _ = self.summary()
+        if summary is None:  # no or damaged summary: the messages stay unattributed
             return
         for schema in summary.schemas.values():
             if schema.id not in self._schemas:
@@ -489,17 +541,84 @@ class Recording:
     def summary_start_time_ns(self) -> int | None:
         """Earliest message log time from the file's summary statistics, if it has them.
 
-        A truncated file has no summary; callers then fall back to the first message read.
+        A truncated file has no summary, and a damaged one is not trusted; callers then fall
+        back to the first message read.
         """
-        try:
-            with open(self.path, "rb") as f:
-                summary = make_reader(f).get_summary()
-        except Exception:  # no or damaged summary: not an error for a streaming reader
-            return None
+        summary, _ = self.summary()
         stats = summary.statistics if summary is not None else None
         if stats is None or stats.message_count == 0:
             return None
         return int(stats.message_start_time)
+
+    def summary(self) -> tuple[SummarySection | None, str | None]:
+        """(the summary section, why it cannot be used): read once, checked against its CRC.
+
+        ``(None, None)`` when the file has no summary (it ends early, or was written without
+        one); ``(None, reason)`` when the summary is damaged, in which case nothing in it is
+        used (its start time would misalign the recording, its channels misattribute messages).
+        """
+        if self._summary_read is None:
+            self._summary_read = _read_summary(self.path, self.size)
+        return self._summary_read
+
+    def _check_summary(self, by_id: dict[int, int], first: int | None, last: int | None) -> None:
+        """Compare a complete pass with the summary: message counts per channel, chunks, span.
+
+        Args:
+            by_id: channel id -> message records read; first, last: their earliest and latest
+                log time [ns] (None when no message was read).
+        """
+        summary, problem = self.summary()
+        if problem is not None:
+            self.report.summary_problem = problem
+        if summary is None:
+            return
+        out = self.report.summary_mismatches
+        if summary.shift:
+            out.append(
+                f"the data section is {abs(summary.shift)} bytes "
+                f"{'longer' if summary.shift > 0 else 'shorter'} than when the summary section "
+                "was written"
+            )
+        stats = summary.statistics
+        if stats is not None:
+            listed = {int(k): int(v) for k, v in stats.channel_message_counts.items()}
+            read = sum(by_id.values())
+            differ = sorted(cid for cid in set(listed) | set(by_id)
+                            if listed.get(cid, 0) != by_id.get(cid, 0))
+            if differ or (stats.message_count and stats.message_count != read):
+                names = {c.id: c.topic for c in summary.channels.values()}
+                names.update({cid: c.topic for cid, c in self.channels.items()})
+                detail = ", ".join(
+                    f"{names.get(cid, f'channel {cid}')} {by_id.get(cid, 0)} of {listed.get(cid, 0)}"
+                    for cid in differ[:4]
+                ) + (f", and {len(differ) - 4} more channels" if len(differ) > 4 else "")
+                out.append(
+                    f"read {read} messages, the summary section lists {stats.message_count} "
+                    f"({detail or 'per channel as listed'}): messages were lost, repeated or "
+                    "added after the summary was written"
+                )
+            elif read and first is not None and last is not None and (
+                first != stats.message_start_time or last != stats.message_end_time
+            ):
+                out.append(
+                    f"messages span log times {first}-{last} ns, the summary section says "
+                    f"{stats.message_start_time}-{stats.message_end_time} ns"
+                )
+        indexed = sorted(ci.chunk_start_offset for ci in summary.chunk_indexes)
+        if indexed and indexed != sorted(self._pass_chunks):
+            moved = len(set(indexed) ^ set(self._pass_chunks))
+            out.append(
+                f"the data section holds {len(self._pass_chunks)} chunks, the summary's chunk "
+                f"index lists {len(indexed)} ({moved} offsets differ): chunks were removed, "
+                "repeated or moved"
+            )
+
+    def warnings(self, name: str) -> list[str]:
+        """The last message pass's warnings plus those of the last attachment pass."""
+        return self.report.warnings(name) + [
+            w.replace(str(self.path), name, 1) for w in self.attachment_warnings
+        ]
 
     def attachments(self) -> Iterator[Attachment]:
         """Every readable attachment record (a separate pass over the file)."""
@@ -551,6 +670,109 @@ _SKIPPED_OPCODES = frozenset(
 _LOADED_OPCODES = frozenset(
     {Opcode.CHUNK, Opcode.MESSAGE, Opcode.SCHEMA, Opcode.CHANNEL, Opcode.METADATA}
 )
+
+
+_FOOTER = struct.Struct("<BQQQI")  # opcode, length, summary start, summary offset start, crc
+_DATA_END_HEAD = _RECORD_HEADER.pack(Opcode.DATA_END, 4)
+#: How far before the footer a summary section that moved is looked for [bytes].
+_SUMMARY_SEARCH_BYTES = 64 << 20
+
+
+@dataclass(frozen=True)
+class SummarySection:
+    """The parts of an MCAP summary section rocas checks a pass against.
+
+    Attributes:
+        schemas, channels: declarations by id.
+        statistics: the Statistics record, or None.
+        chunk_indexes: every ChunkIndex record.
+        shift: where the summary was found minus where the footer says it starts [bytes];
+            not 0 when the data section grew or shrank after the file was written.
+    """
+
+    schemas: dict[int, Schema]
+    channels: dict[int, Channel]
+    statistics: Statistics | None
+    chunk_indexes: list[ChunkIndex]
+    shift: int = 0
+
+
+def _read_summary(path: Path, size: int) -> tuple[SummarySection | None, str | None]:
+    """(summary, problem) of :meth:`Recording.summary`.
+
+    The summary is where the footer says, or, when the data section before it changed length
+    (a chunk removed or repeated), right after the Data End record found by searching back from
+    the footer; either way its CRC must match before anything in it is used.
+    """
+    tail = len(MAGIC) + _FOOTER.size
+    if size < len(MAGIC) + tail:
+        return None, None
+    try:
+        with open(path, "rb") as f:
+            f.seek(size - tail)
+            footer = f.read(tail)
+            opcode, length, start, _, crc = _FOOTER.unpack_from(footer)
+            if opcode != Opcode.FOOTER or length != 20 or footer[-len(MAGIC):] != MAGIC:
+                return None, None  # no footer: the walk reports where the file ends
+            if start == 0:
+                return None, None  # written without a summary
+            footer_pos = size - tail
+            covered_end = footer_pos + _FOOTER.size - 4  # the CRC covers up to its own field
+
+            def crc_ok(at: int) -> bool:
+                if not len(MAGIC) <= at <= footer_pos:
+                    return False
+                f.seek(at)
+                return zlib.crc32(f.read(covered_end - at)) == crc
+
+            found: int | None = start if len(MAGIC) <= start <= footer_pos else None
+            if crc != 0 and (found is None or not crc_ok(found)):
+                found = None
+                lo = max(len(MAGIC), footer_pos - _SUMMARY_SEARCH_BYTES)
+                f.seek(lo)
+                block = f.read(footer_pos - lo)
+                at = block.rfind(_DATA_END_HEAD)
+                while at >= 0:
+                    if crc_ok(lo + at + _RECORD_HEADER.size + 4):
+                        found = lo + at + _RECORD_HEADER.size + 4
+                        break
+                    at = block.rfind(_DATA_END_HEAD, 0, at)
+            if found is None:
+                return None, ("the summary section is damaged (it fails its CRC check); the "
+                              "counts it lists could not be checked and nothing in it is used")
+            f.seek(found)
+            body = f.read(footer_pos - found)
+        return _parse_summary(body, found - start), None
+    except Exception as exc:  # a damaged summary is reported, never raised
+        return None, (f"the summary section is unreadable ({describe_error(exc)}); the counts "
+                      "it lists could not be checked")
+
+
+def _parse_summary(data: bytes, shift: int) -> SummarySection:
+    """The records of a summary section (``data``: its bytes up to the footer)."""
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    stats: Statistics | None = None
+    indexes: list[ChunkIndex] = []
+    pos = 0
+    while pos < len(data):
+        opcode, length = _RECORD_HEADER.unpack_from(data, pos)
+        start = pos + _RECORD_HEADER.size
+        if length > len(data) - start:
+            raise ValueError(f"a summary record at byte {pos} claims {length} bytes")
+        stream = ReadDataStream(io.BytesIO(data[start : start + length]))
+        if opcode == Opcode.SCHEMA:
+            sch = Schema.read(stream)
+            schemas[sch.id] = sch
+        elif opcode == Opcode.CHANNEL:
+            ch = Channel.read(stream)
+            channels[ch.id] = ch
+        elif opcode == Opcode.STATISTICS:
+            stats = Statistics.read(stream)
+        elif opcode == Opcode.CHUNK_INDEX:
+            indexes.append(ChunkIndex.read(stream))
+        pos = start + length
+    return SummarySection(schemas, channels, stats, indexes, shift)
 
 
 def _peek(f: io.BufferedReader, offset: int, n: int) -> bytes:

@@ -55,8 +55,13 @@ class Reconstruction:
         tracks: the obstacle tracks the actors were built from.
         original_summary: the recorder's one-line outcome ("" when absent).
         recorded_partner: the recorder's name of the collision partner (simulator id).
-        notes: assumptions made (missing metadata, unrecognised colours, ...).
+        notes: assumptions made (missing metadata, unrecognised colours, ...), and the
+            recording's damage (the lines of ``warnings`` come first).
         path: the recording.
+        warnings: what the reader found: damage (truncation, skipped chunks, counts that
+            disagree with the summary section), undecodable messages, one line each. Empty
+            when the whole recording was read; a reconstruction with warnings may differ from
+            the one the whole file would give.
     """
 
     scenario: Scenario
@@ -68,6 +73,12 @@ class Reconstruction:
     recorded_partner: str | None = None
     notes: tuple[str, ...] = ()
     path: str = ""
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def complete(self) -> bool:
+        """Whether the reconstruction used the whole recording (no :attr:`warnings`)."""
+        return not self.warnings
 
 
 def _ego_from_meta(meta: dict[str, str]) -> dict[str, Any]:
@@ -230,7 +241,8 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
         original = AccidentInfo(kind, t, other)
     return Reconstruction(scenario=scenario, original=original, ego_track=rec.ego_track,
                           times=rec.ego_times, tracks=tracks, original_summary=summary,
-                          recorded_partner=partner, notes=tuple(notes), path=rec.path)
+                          recorded_partner=partner, notes=tuple(notes), path=rec.path,
+                          warnings=rec.warnings)
 
 
 def _sorted_params(ego: Ego) -> Ego:

@@ -78,6 +78,8 @@ class ReplayReport:
             "output": self.output,
             "wall_time_s": self.wall_time_s,
             "notes": list(rec.notes) if rec else [],
+            "warnings": list(rec.warnings) if rec else [],
+            "complete": rec.complete if rec else True,
         }
 
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -95,9 +94,7 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
         RecordingError: the file lacks the world attachment, the pose or the obstacle channel.
     """
     path = str(path)
-    if not Path(path).is_file():
-        raise RecordingError(f"{path}: no such file")
-    rec = open_recording(path)
+    rec = open_recording(path)  # refuses a missing file, a directory, an empty or non-MCAP one
     pose_rows: list[tuple[float, ...]] = []
     lanes: list[str] = []
     frames: list[tuple[float, Any, tuple[float, float, float] | None]] = []
@@ -134,9 +131,11 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
         raise RecordingError(f"{path}: no decodable message on {TOPIC_POSE}",
                              "the ego's pose series is what replay transforms obstacles with")
     world_bytes = rec.attachment(WORLD_ATTACHMENT)
+    damage = tuple(rec.warnings(path))  # the message pass's and the attachment pass's
     if world_bytes is None:
         raise RecordingError(
-            f"{path}: no {WORLD_ATTACHMENT} attachment (the static world: map, entities, weather)",
+            f"{path}: no {WORLD_ATTACHMENT} attachment (the static world: map, entities, weather)"
+            + (f"; {damage[-1].removeprefix(path + ': ')}" if damage else ""),
             "replay needs it; recordings made by 'rocas simulate' carry it, "
             "'rocas annotate' does not add it")
     try:

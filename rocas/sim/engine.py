@@ -11,7 +11,7 @@ Both are pure functions of picklable inputs: (scenario, parameter overrides, see
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence, Set
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +26,8 @@ from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_fricti
 
 MODULE_ORDER = ("localization", "canbus", "perception", "prediction", "planning", "control")
 ParamsLike = Mapping[str, float] | ParamSet | None
+#: modules publishing ground truth: one set of names for every variant, or one set per variant
+OracleModules = Set[str] | Sequence[Set[str]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,10 +90,11 @@ def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleStat
 
 def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[ParamSet], *,
          publish: Publisher | None = None, track_outputs: bool = False,
-         on_tick: Callable[[int], None] | None = None) -> BatchResult:
+         on_tick: Callable[[int], None] | None = None,
+         oracle_modules: OracleModules = frozenset()) -> BatchResult:
     n = world.batch_size
     scenario = scenarios[0]  # the structure (route, start arc length) all variants share
-    stack = AdsStack(world, stack_params(param_sets))
+    stack = AdsStack(world, stack_params(param_sets), oracle_modules)
     ego = initial_ego(world, scenarios)
     actors = initial_actors(world)
     friction = road_friction(world.weather[:, 1])
@@ -117,7 +120,7 @@ def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[
     record(0)
     for tick in range(steps):
         t = tick * world.dt_s
-        out = stack.step(tick, ego, accel, actors.body)
+        out = stack.step(tick, ego, accel, actors.body, actors)
         if publish is not None:
             publish(tick, t, out)
         if digests is not None:
@@ -148,6 +151,7 @@ def simulate_batch(
     seeds: Sequence[int] | None = None,
     *,
     track_outputs: bool = False,
+    oracle_modules: OracleModules = frozenset(),
 ) -> BatchResult:
     """Simulate N variants together (batch mode; records nothing).
 
@@ -158,6 +162,9 @@ def simulate_batch(
             scenario's own ``ego.params``; None means none.
         seeds: N seeds; None means each scenario's seed.
         track_outputs: also return per-module output fingerprints (``digests``).
+        oracle_modules: modules whose output is replaced by ground truth (module
+            substitution, :mod:`rocas.ads.oracle`): one set of names for every variant, or N
+            sets; empty (the default) runs the ADS as it is.
 
     Returns:
         :class:`BatchResult`; variant i is identical to ``simulate(scenarios[i], params[i],
@@ -175,7 +182,8 @@ def simulate_batch(
     seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
     world = compile_batch(scenarios, seeds)
     sets = [resolve_params(s, p) for s, p in zip(scenarios, params, strict=True)]
-    return _run(world, scenarios, sets, track_outputs=track_outputs)
+    return _run(world, scenarios, sets, track_outputs=track_outputs,
+                oracle_modules=oracle_modules)
 
 
 def simulate(

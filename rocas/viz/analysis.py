@@ -224,28 +224,40 @@ def analysis_blueprint(
     return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE), collapse_panels=True)
 
 
-def recording_blueprint(name: str, ex: Execution) -> Any:
-    """The layout of ``rocas view RECORDING.mcap``: scene, signals, every channel's fields."""
+#: The timeline of Rerun's own MCAP importer, which ``rocas view RECORDING.mcap`` uses to show
+#: every channel (protobuf, ROS 2 and Foxglove schemas decoded by Rerun, other channels raw)
+#: at the entity path of its topic (rerun-sdk 0.41 ignores an entity path prefix for MCAP):
+#: the importer's timeline (each message's MCAP log time).
+MCAP_TIMELINE = "message_log_time"
+
+
+def recording_blueprint(name: str, ex: Execution, topics: Sequence[str] = ()) -> Any:
+    """The layout of ``rocas view RECORDING.mcap``: scene and signals (when rocas finds them in
+    the recording) left, and every channel as Rerun's MCAP importer shows it (``topics``), one
+    tab each."""
     import rerun.blueprint as rrb
 
     channel_views = [
-        rrb.TimeSeriesView(origin=f"executions/{name}/channels/{c}", name=c)
-        for c in sorted(_channel_entities(ex))
+        rrb.DataframeView(origin=t if t.startswith("/") else "/" + t, name=t)
+        for t in sorted(topics)
     ]
     right = rrb.Tabs(*channel_views, active_tab=0) if channel_views else None
-    left = rrb.Vertical(
-        _scene_view(name, ex),
-        rrb.Tabs(*_signal_views([name], _has_brake(ex)), active_tab=0),
-        row_shares=[3, 2],
-    )
-    layout = rrb.Horizontal(left, right, column_shares=[3, 2]) if right is not None else left
-    return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE), collapse_panels=True)
+    if right is not None and ex.world is None and not len(ex.ego_t) and not _signal_channels(ex):
+        layout = right
+        timeline = MCAP_TIMELINE
+    else:
+        left = rrb.Vertical(
+            _scene_view(name, ex),
+            rrb.Tabs(*_signal_views([name], _has_brake(ex)), active_tab=0),
+            row_shares=[3, 2],
+        )
+        layout = rrb.Horizontal(left, right, column_shares=[3, 2]) if right is not None else left
+        timeline = TIMELINE
+    return rrb.Blueprint(layout, rrb.TimePanel(timeline=timeline), collapse_panels=True)
 
 
-def _channel_entities(ex: Execution) -> list[str]:
-    from rocas.viz.signals import entity_name
-
-    return [entity_name(c.topic) for c in ex.channels.values() if len(c.times_s) and c.names]
+def _signal_channels(ex: Execution) -> list[str]:
+    return [c.topic for c in ex.channels.values() if len(c.times_s) and c.names]
 
 
 def _has_brake(ex: Execution) -> bool:
@@ -254,14 +266,30 @@ def _has_brake(ex: Execution) -> bool:
 
 def write_recording_rrd(
     path: str | os.PathLike[str], recording: str | os.PathLike[str], name: str = "accident"
-) -> Execution:
-    """Write the ``.rrd`` of one plain recording (scene, signals, channels) with its layout."""
+) -> tuple[Execution, tuple[str, ...]]:
+    """Write the ``.rrd`` of one plain recording with its layout: the scene and signals rocas
+    reads from it, and the recording itself through Rerun's MCAP importer (each channel at its
+    topic's entity path), which shows every channel in the viewer's own way.
+
+    Returns:
+        The execution rocas read and the topics that hold messages.
+
+    Raises:
+        InputError: the recording holds neither a readable message nor a world attachment
+            (the ``.rrd`` would be empty).
+    """
+    from rocas.recording import open_recording
+
     ex = load_execution(recording)
-    with rrd_recording(
-        path, recording_blueprint(name, ex), recording_id=f"rocas-view-{Path(recording).stem}"
-    ) as rec:
-        log_execution(rec, name, ex)
-    return ex
+    scan = open_recording(recording).scan()
+    topics = tuple(sorted(t for t, st in scan.report.channel_stats.items() if st.messages))
+    if not topics and ex.world is None:
+        raise InputError(f"{recording}: nothing to show (no readable message and no world)")
+    with rrd_recording(path, recording_blueprint(name, ex, topics), kind="view") as rec:
+        log_execution(rec, name, ex, channels=False)
+        if topics:
+            rec.log_file_from_path(Path(recording))
+    return ex, topics
 
 
 def write_analysis_rrd(
@@ -307,7 +335,7 @@ def write_analysis_rrd(
         brake=any(_has_brake(e) for _, e in executions),
         focus=executions[0][1],
     )
-    with rrd_recording(path, bp, recording_id="rocas-analysis") as rec:
+    with rrd_recording(path, bp, kind="analysis") as rec:
         for name, ex in executions:
             log_execution(rec, name, ex, highlight=ids if name in ("accident", "reference") else ())
         if diff_result is not None:
@@ -449,7 +477,7 @@ def write_run_dir_rrd(path: str | os.PathLike[str], run_dir: str | os.PathLike[s
         focus=c["accident"],
         validation="validation" in c,
     )
-    with rrd_recording(path, bp, recording_id="rocas-analysis") as rec:
+    with rrd_recording(path, bp, kind="analysis") as rec:
         _log_contents(rec, c)
     return c
 

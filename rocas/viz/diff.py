@@ -153,5 +153,5 @@ def log_diff(rec: Any, result: DiffResult, prefix: str = "diff",
 
 def write_diff_rrd(result: DiffResult, path: str | os.PathLike[str]) -> None:
     """Write a ``.rrd`` of the diff with its default blueprint (atomically)."""
-    with rrd_recording(path, diff_blueprint(), recording_id="rocas-diff") as rec:
+    with rrd_recording(path, diff_blueprint(), kind="diff") as rec:
         log_diff(rec, result)

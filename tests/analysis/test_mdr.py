@@ -1,5 +1,7 @@
 import math
 
+import numpy as np
+import pytest
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -138,3 +140,61 @@ def test_json_mdr_properties(a, b):
     score = mdr(a, b)
     assert 0.0 <= score <= 1.0
     assert math.isclose(score, mdr(b, a))
+
+
+# -- ROS 2 messages (rosbags dataclasses) ---------------------------------------------------
+ROS2_POSE = (
+    "uint32 id\nstring label\nfloat64[] covariance\nPoint[] path\nPoint position\n"
+    "================================================================================\n"
+    "MSG: pkg/Point\nfloat64 x\nfloat64 y\n"
+)
+
+
+@pytest.fixture(scope="module")
+def ros2_msg():
+    from rocas.recording.decoding import DecoderCache
+
+    cache = DecoderCache()
+    decode_other = cache.decoder("cdr", "pkg/msg/Other", "ros2msg", b"float64 x")
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.EMPTY)
+    store.register(get_types_from_msg(ROS2_POSE, "pkg/msg/Pose"))
+    Pose = store.types["pkg/msg/Pose"]
+    Point = store.types["pkg/msg/Point"]
+
+    def make(id=1, label="car", cov=(1.0, 0.0, 0.0, 1.0), path=((0.0, 0.0), (1.0, 1.0)),
+             pos=(5.0, 6.0)):
+        return Pose(id=id, label=label, covariance=np.array(cov, dtype=np.float64),
+                    path=[Point(x=x, y=y) for x, y in path], position=Point(x=pos[0], y=pos[1]))
+
+    other = decode_other(b"\x00\x01\x00\x00" + np.array([1.0]).tobytes())
+    return make, other
+
+
+def test_ros2_identical_messages_score_zero(ros2_msg):
+    make, _ = ros2_msg
+    assert mdr(make(), make()) == 0.0
+
+
+def test_ros2_children_are_the_declared_fields(ros2_msg):
+    make, other = ros2_msg
+    assert mdr(make(), make(id=2)) == pytest.approx(1 / 5)
+    assert mdr(make(), make(label="truck")) == pytest.approx(1 / 5)
+    # a primitive array is a repeated node: one of four leaves differs
+    assert mdr(make(), make(cov=(1.0, 0.5, 0.0, 1.0))) == pytest.approx(1 / 4 / 5)
+    assert mdr(make(), make(cov=(1.0,))) == pytest.approx(1 / 5)  # child counts differ
+    # a sequence of messages: one of two points, one of its two fields
+    assert mdr(make(), make(path=((0.0, 0.0), (1.0, 2.0)))) == pytest.approx(1 / 2 / 2 / 5)
+    assert mdr(make(), make(pos=(5.0, 7.0))) == pytest.approx(1 / 2 / 5)
+    assert mdr(make(), other) == 1.0 and mdr(make(), {"id": 1}) == 1.0
+
+
+def test_ros2_float_leaves_take_the_tolerance(ros2_msg):
+    make, _ = ros2_msg
+    a, b = make(cov=(1.0, 0.0, 0.0, 1.0), pos=(5.0, 6.0)), make(cov=(1.0, 1e-9, 0.0, 1.0),
+                                                                  pos=(5.0, 6.0 + 1e-9))
+    assert mdr(a, b) > 0.0
+    assert mdr(a, b, Tolerance(atol=1e-6)) == 0.0
+    nan = make(cov=(float("nan"), 0.0, 0.0, 1.0))
+    assert mdr(nan, make(cov=(float("nan"), 0.0, 0.0, 1.0))) == 0.0

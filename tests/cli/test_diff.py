@@ -130,7 +130,7 @@ def test_non_protobuf_channels_are_skipped_with_a_warning(rocas, tmp_path):
     skipped = [ln for ln in res.stderr.splitlines() if "skipped channel" in ln]
     assert skipped == [
         f"rocas: warning: {tmp_path / name}: skipped channel /ros_topic: 100 messages in an "
-        "encoding rocas cannot decode (only protobuf and json are compared)"
+        "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
         for name in ("a.mcap", "b.mcap")
     ]
     assert json.loads(res.stdout)["deviating_module"] == "control"

@@ -118,6 +118,7 @@ def test_ctrl_c_while_writing_the_rrd_leaves_no_file(rocas, monkeypatch, pair, t
 
     monkeypatch.setattr("rocas.viz.diff.log_diff", interrupted)
     out = tmp_path / "out" / "diff.rrd"
+    out.parent.mkdir()
     res = rocas("diff", pair.accident, pair.reference, "--rrd", out)
     assert res.code == 130
     assert "interrupted (no output was written)" in res.stderr
@@ -175,3 +176,20 @@ def test_traceback_is_accepted_after_every_command_and_action():
     for argv in (["catalog", "list", "--traceback"], ["catalog", "--traceback", "list"],
                  ["params", "--traceback"], ["--traceback", "catalog", "list"]):
         assert parser.parse_args(argv).traceback is True, argv
+
+
+@pytest.mark.parametrize("command", [
+    ("view", "{rec}", "--no-viewer", "--rrd", "{out}/x.rrd"),
+    ("diff", "{rec}", "{rec}", "--rrd", "{out}/x.rrd"),
+    ("simulate", "junction_straight", "-o", "{out}/x.mcap"),
+    ("annotate", "{rec}", "--control-channel", "/control", "-o", "{out}/x.mcap"),
+    ("analyze", "{rec}", "--out", "{out}/run"),
+])
+def test_a_missing_output_folder_exits_5_and_is_not_created(rocas, red_truck_recording, tmp_path,
+                                                            command):
+    missing = tmp_path / "nonexistent" / "dir"
+    argv = [a.format(rec=red_truck_recording, out=missing) for a in command]
+    res = rocas(*argv)
+    assert res.code == 5, res.stderr
+    assert "does not exist" in res.stderr and "mkdir -p" in res.stderr
+    assert not (tmp_path / "nonexistent").exists()

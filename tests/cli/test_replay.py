@@ -27,7 +27,7 @@ def test_replay_errors(rocas, tmp_path, red_truck_recording):
     r = rocas("replay", tmp_path / "missing.mcap")
     assert r.code == 3 and "no such file" in r.stderr
     r = rocas("replay", red_truck_recording, "--set", "perception.nope=1")
-    assert r.code == 3 and "perception.nope" in r.stderr
+    assert r.code == 2 and "perception.nope" in r.stderr
     r = rocas("replay", red_truck_recording, "-o", tmp_path / "x.txt")
     assert r.code == 2
 

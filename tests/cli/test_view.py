@@ -13,7 +13,9 @@ def test_view_writes_the_rrd_of_a_recording(rocas, red_truck_recording, tmp_path
     assert "Rerun recording" in res.stdout and "pose from /localization/pose" in res.stdout
     e, blueprints = read_rrd(out)
     assert blueprints == 1 and e["/executions/accident/ego/box"].rows > 0
-    assert "/executions/accident/channels/canbus.chassis" in e
+    # raw channels come from Rerun's own MCAP importer, not re-plotted by rocas
+    assert e["/canbus/chassis"].rows > 0 and "message_log_time" in e["/canbus/chassis"].timelines
+    assert not any(p.startswith("/executions/accident/channels/") for p in e)
 
 
 def test_view_of_a_run_dir(rocas, red_truck_recording, tmp_path):
@@ -50,7 +52,7 @@ def test_view_errors(rocas, tmp_path):
     res = rocas("view", tmp_path, "--no-viewer", "--rrd", tmp_path / "x.rrd")
     assert res.code != 0 and "no accident.mcap" in res.stderr
     res = rocas("view", tmp_path, "--no-viewer")
-    assert res.code != 0 and "--rrd" in res.stderr
+    assert res.code == 2 and "--rrd" in res.stderr and "(see 'rocas view --help')" in res.stderr
     assert not (tmp_path / "x.rrd").exists()
 
 
@@ -59,3 +61,52 @@ def test_has_display():
         pytest.skip("always a display")
     assert not has_display({})
     assert has_display({"DISPLAY": ":0"}) and has_display({"WAYLAND_DISPLAY": "wayland-0"})
+
+
+class _FakeViewer:
+    """Stands in for ``subprocess.Popen`` of the ``rerun`` executable."""
+
+    def __init__(self, exit_code=None, stderr=b""):
+        self.exit_code, self.stderr_bytes, self.argv = exit_code, stderr, None
+
+    def __call__(self, argv, **kwargs):
+        import io
+        import subprocess
+
+        self.argv = argv
+        fake = self
+
+        class Proc:
+            pid = 4242
+            stderr = io.BytesIO(fake.stderr_bytes)
+
+            def wait(self, timeout=None):
+                if fake.exit_code is None:
+                    raise subprocess.TimeoutExpired(argv, timeout)
+                return fake.exit_code
+
+        return Proc()
+
+
+def test_native_view_leaves_the_file_to_the_viewer(rocas, red_truck_recording, monkeypatch):
+    viewer = _FakeViewer()
+    monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
+    monkeypatch.setattr("subprocess.Popen", viewer)
+    res = rocas("view", red_truck_recording)
+    assert res.code == 0, res.stderr
+    assert "Started the Rerun viewer (process 4242)" in res.stdout
+    from pathlib import Path
+
+    shown = Path(viewer.argv[-1])
+    assert shown.suffix == ".rrd" and shown.stat().st_size > 0  # not removed under the viewer
+    assert str(shown) in res.stdout
+    shown.unlink()
+    shown.parent.rmdir()
+
+
+def test_native_view_reports_a_viewer_that_fails(rocas, red_truck_recording, monkeypatch, tmp_path):
+    monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
+    monkeypatch.setattr("subprocess.Popen", _FakeViewer(1, b"starting\nError: no GPU adapter\n"))
+    res = rocas("view", red_truck_recording, "--rrd", tmp_path / "v.rrd")
+    assert res.code != 0 and "exited at once with status 1: Error: no GPU adapter" in res.stderr
+    assert "Opened" not in res.stdout and "Started" not in res.stdout

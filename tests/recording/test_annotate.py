@@ -211,3 +211,25 @@ def test_damage_inside_a_chunk_is_described_in_words():
     assert _damage(ValueError(""), 100, 500, copying=False, at_end=False) == (
         "is damaged or truncated (ValueError)"
     )
+
+
+def test_repair_and_convert_hints_name_tools_that_are_installed(tmp_path):
+    """The mcap CLI is not installed by pip: hints say so and name what is installed."""
+    import shutil
+    import subprocess
+
+    from rocas.errors import RecordingError
+    from rocas.recording import open_recording
+    from rocas.recording.annotate import REPAIR_HINT
+
+    assert "separate download" in REPAIR_HINT and "'rerun mcap check FILE'" in REPAIR_HINT
+    rerun = shutil.which("rerun")
+    assert rerun is not None
+    done = subprocess.run([rerun, "mcap", "check", "--help"], capture_output=True, timeout=60,
+                          check=False)
+    assert done.returncode == 0
+    not_mcap = tmp_path / "bag.db3"
+    not_mcap.write_bytes(b"SQLite format 3\x00")
+    with pytest.raises(RecordingError) as info:
+        open_recording(not_mcap)
+    assert "rosbags-convert" in info.value.hint and shutil.which("rosbags-convert") is not None

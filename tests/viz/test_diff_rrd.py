@@ -50,3 +50,15 @@ def test_cli_writes_the_rrd(rocas, result, tmp_path):
     res = rocas("diff", result.accident, result.reference, "--rrd", out)
     assert res.code == 0 and out.exists()
     assert "Rerun recording" in res.stdout
+
+
+def test_every_rrd_has_its_own_recording_id(result, tmp_path):
+    from rerun.chunk import RrdReader
+
+    ids = []
+    for name in ("one.rrd", "two.rrd"):
+        write_diff_rrd(result, tmp_path / name)
+        (store,) = RrdReader(tmp_path / name).recordings()
+        ids.append(store.recording_id)
+    assert ids[0] != ids[1]  # opened together, they stay two recordings
+    assert all(i.startswith("rocas-diff-") for i in ids)

@@ -1,0 +1,31 @@
+"""Start-up cost: heavy libraries are imported where they are used, not to parse options."""
+
+import subprocess
+import sys
+
+HEAVY = ("numpy", "networkx", "scipy", "ruptures", "rerun", "pymoo", "rosbags", "google.protobuf")
+NOT_FOR_OPTIONS = ("scipy", "ruptures", "rerun", "pymoo", "rosbags")
+
+
+def _imported(*argv: str) -> set[str]:
+    code = "import sys; from rocas.cli.main import main; sys.exit(main(sys.argv[1:]))"
+    done = subprocess.run([sys.executable, "-X", "importtime", "-c", code, *argv],
+                          capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    names = set()
+    for line in done.stderr.splitlines():
+        if line.startswith("import time:") and "|" in line:
+            names.add(line.rsplit("|", 1)[1].strip())
+    return names
+
+
+def _top(names: set[str], roots: tuple[str, ...]) -> set[str]:
+    return {n for n in names if any(n == r or n.startswith(r + ".") for r in roots)}
+
+
+def test_version_imports_nothing_heavy():
+    assert _top(_imported("--version"), HEAVY) == set()
+
+
+def test_diff_options_parse_without_the_analysis_libraries():
+    assert _top(_imported("diff", "--help"), NOT_FOR_OPTIONS) == set()
