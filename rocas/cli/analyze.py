@@ -30,6 +30,11 @@ def add_search_arguments(p: argparse.ArgumentParser,
     p.add_argument("--no-screening", dest="screening", action="store_false",
                    help="start the cyber search without trying each parameter alone first "
                         "(a plain genetic search, as the paper's has no screening)")
+    p.add_argument("--references", type=int, default=2, metavar="N",
+                   help="also diff the accident against N other accident-free references and "
+                        "report how many name the same module (default 2)")
+    p.add_argument("--no-second-opinion", dest="second_opinion", action="store_false",
+                   help="skip module substitution, the deviating module's second opinion")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -59,7 +64,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, population=args.population, scope=args.scope,
                         executor=args.executor, workers=args.workers, delta_s=args.delta,
-                        validation_variants=args.validation, screening=args.screening)
+                        validation_variants=args.validation, screening=args.screening,
+                        alternate_references=args.references, second_opinion=args.second_opinion)
     if args.scenario:
         from rocas.scenarios import resolve_scenario
 
@@ -205,6 +211,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rocas.pipeline.report import (
         accident_text,
         change,
+        confidence_text,
         replay_text,
         robust_text,
         settings_text,
@@ -226,6 +233,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
             t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
         t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
+    if report.get("confidence"):
+        t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:
         t.add_row("misconfiguration", change(m, "->"))
     for alt in report.get("alternatives", []):

@@ -44,7 +44,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.pipeline.config import AnalyzeConfig
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
-                        validation_variants=args.validation, screening=args.screening)
+                        validation_variants=args.validation, screening=args.screening,
+                        alternate_references=args.references, second_opinion=args.second_opinion)
     kwargs: dict[str, Any] = {"recordings": Path(args.recordings), "compare_scope": args.compare_scope,
                               "instances": args.instances,
                               "progress": lambda msg: print(msg, file=env.stderr, flush=True)}

@@ -16,6 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from rocas.pipeline.confidence import phase_confidence
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.cyber_phase import phase_cyber
 from rocas.pipeline.diff_phase import phase_diff
@@ -79,7 +80,10 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
     if "chosen" not in physical:
         return write_report(run.out, build_report(run.state, run.accident, "no_reference"))
     run.progress("diff", {})
-    diff = phase_diff(run)
+    phase_diff(run)
+    run.progress("confidence", {})
+    phase_confidence(run)  # may adopt the references' majority: read the diff's summary after it
+    diff = run.state["done"]["diff"]
     cyber = phase_cyber(run, diff["deviating_module"])
     if "fix" not in cyber:
         return write_report(run.out, build_report(run.state, run.accident, "no_configuration_fix"))

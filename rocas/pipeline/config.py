@@ -13,7 +13,7 @@ from rocas.errors import UsageError
 from rocas.search.ga import SearchConfig
 from rocas.search.space import MutationSpace
 
-PHASES = ("replay", "physical", "diff", "cyber", "validation")
+PHASES = ("replay", "physical", "diff", "confidence", "cyber", "validation")
 VERDICTS = ("misconfiguration", "no_configuration_fix", "no_reference", "not_reproduced")
 
 
@@ -43,6 +43,11 @@ class AnalyzeConfig:
             range (two simulations per parameter, out of the budget); False runs a plain
             genetic search (the paper has no screening) from a population half single-parameter
             mutants, half random.
+        alternate_references: how many other accident-free references (changing other
+            properties than the chosen one) the accident is also diffed against, for the
+            agreement of the deviating module (:mod:`rocas.pipeline.confidence`).
+        second_opinion: also ask module substitution (ground-truth perception, prediction)
+            which module's output the accident needs.
     """
 
     seed: int = 0
@@ -58,6 +63,8 @@ class AnalyzeConfig:
     h1_limit_m2: float = 1.0
     shrink_candidates: int = 3
     screening: bool = True
+    alternate_references: int = 2
+    second_opinion: bool = True
 
     def __post_init__(self) -> None:
         # every setting is checked here, before a run directory is made or a simulation runs
@@ -95,6 +102,7 @@ class AnalyzeConfig:
         real(self.k_suspicion, "k_suspicion", 10.0, positive=True)
         real(self.h1_limit_m2, "h1_limit_m2", 1.0)
         whole(self.shrink_candidates, 1, "shrink_candidates", 3)
+        whole(self.alternate_references, 0, "--references", 2)
 
     def search(self, stage: int, n_vars: int = 0) -> SearchConfig:
         """The search of stage 1 (physical: single-property seeds) or 2 (cyber).
@@ -138,7 +146,8 @@ def screening_simulations(space: MutationSpace, seed: int) -> int:
 _NOT_SETTINGS = ("executor", "workers")
 #: ... and those the report lists (batch_size only groups simulations)
 REPORT_SETTINGS = ("seed", "budget", "population", "scope", "screening", "delta_s",
-                   "validation_variants", "h1_limit_m2", "k_suspicion", "shrink_candidates")
+                   "validation_variants", "h1_limit_m2", "k_suspicion", "shrink_candidates",
+                   "alternate_references", "second_opinion")
 
 
 def config_dict(cfg: AnalyzeConfig) -> dict[str, Any]:

@@ -41,7 +41,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     physical = done.get("physical", {})
     diff = done.get("diff", {})
     cyber = done.get("cyber", {})
-    trig = physical.get("triggering_entity")
+    trig = (done.get("confidence") or {}).get("triggering_entity") or physical.get("triggering_entity")
     module = diff.get("deviating_module")
     mis = cyber.get("misconfiguration", [])
     from rocas.pipeline.config import REPORT_SETTINGS, AnalyzeConfig
@@ -61,6 +61,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "triggering_entity": trig,
         "deviating_module": module,
         "path": diff.get("path", []),
+        "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
         "validation": done.get("validation"),
@@ -150,7 +151,18 @@ def settings_text(report: dict[str, Any]) -> str:
             f"scope {s['scope']}, screening {'on' if s['screening'] else 'off'}, "
             f"delta {_fmt(s['delta_s'])} s, validation {s['validation_variants']} variants, "
             f"h1 limit {_fmt(s['h1_limit_m2'])} m^2, K {_fmt(s['k_suspicion'])} m, "
-            f"{s['shrink_candidates']} fixes shrunk")
+            f"{s['shrink_candidates']} fixes shrunk, "
+            f"{s.get('alternate_references', 0)} alternate references, "
+            f"second opinion {'on' if s.get('second_opinion') else 'off'}")
+
+
+def confidence_text(report: dict[str, Any]) -> str:
+    """The deviating module's confidence in one line: its level, the agreement of the
+    references, the runner-up and the second opinion (rocas.pipeline.confidence)."""
+    c = report.get("confidence") or {}
+    if not c:
+        return ""
+    return f"{c['level']}: {c['note']}"
 
 
 def _fmt(v: Any) -> str:
@@ -196,6 +208,8 @@ def markdown(report: dict[str, Any]) -> str:
     if report["deviating_module"]:
         lines.append(f"- **Deviating module**: {report['deviating_module']} "
                      f"(walk: {' → '.join(report['path'])})")
+    if report.get("confidence"):
+        lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:
         lines.append(f"- **Misconfiguration**: {change(m)}")
     for alt in report.get("alternatives", []):

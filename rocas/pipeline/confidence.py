@@ -1,0 +1,172 @@
+"""Confidence in the deviating module: does the answer survive another reference, and does an
+independent method agree?
+
+Algorithm 1's answer depends on the reference execution the physical phase chose. The phase
+records the accident-free candidates in the order of its rule (``physical["front"]``); this
+phase diffs the accident against the best few *other* references (each changing other
+properties than the chosen one, so that each is an independent view of the accident) and counts
+how many name the same module. It also asks module substitution
+(:func:`rocas.pipeline.substitution.second_opinion`), which uses no reference at all, whether
+its answer agrees.
+
+The verdict on the answer:
+
+- ``stable``: a clear majority of the references name the module (more than half), and
+  substitution agrees with it or is consistent with it;
+- ``contested``: a clear majority, but substitution disagrees (the report says why it may);
+- ``unstable``: no clear majority: the module depends on which reference was chosen.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from typing import Any
+
+from rocas._fs import write_text_atomic
+from rocas.pipeline.physical import apply_physical
+from rocas.pipeline.rundir import Run
+from rocas.search.space import Mutation
+
+#: the report's words for each substitution stance (rocas.pipeline.substitution)
+_STANCE_WORDS = {
+    "agrees": "module substitution names the same module",
+    "consistent": "module substitution clears perception and prediction, consistent with a "
+                  "downstream module",
+    "disagrees": "module substitution points elsewhere",
+    "undetermined": "module substitution found no accident to explain",
+}
+
+
+def alternate_references(front: list[dict[str, Any]], chosen: dict[str, Any], count: int
+                         ) -> list[dict[str, Any]]:
+    """Up to ``count`` candidates of ``front`` (best first) that change another set of
+    properties than ``chosen`` and than each other."""
+    seen = {tuple(sorted(chosen["mutation"]))}
+    out: list[dict[str, Any]] = []
+    for c in front:
+        key = tuple(sorted(c["mutation"]))
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append(c)
+        if len(out) == count:
+            break
+    return out
+
+
+def agreement(modules: list[str | None]) -> dict[str, Any]:
+    """The majority answer among the references' modules (ties: the best-ranked reference's
+    answer, i.e. the earliest in ``modules``), how many name it, and the runner-up."""
+    counts = Counter(modules)
+    best = max(counts.values())
+    majority = next(m for m in modules if counts[m] == best)
+    others = [(n, m) for m, n in counts.most_common() if m != majority]
+    return {"module": majority, "runs": len(modules), "same": best,
+            "runner_up": {"module": others[0][1], "runs": others[0][0]} if others else None}
+
+
+def level(agree: dict[str, Any], stance: str | None) -> str:
+    """stable / contested / unstable (see the module docstring)."""
+    if 2 * agree["same"] <= agree["runs"]:
+        return "unstable"
+    if stance == "disagrees":
+        return "contested"
+    return "stable"
+
+
+def phase_confidence(run: Run) -> dict[str, Any]:
+    """Diff the accident against alternate references, adopt the majority's answer, and ask
+    module substitution. Returns the phase's result; when the majority's module is not the
+    chosen reference's, the best-ranked reference that names it becomes the reference
+    (reference.mcap, diff.json and the diff phase's summary are rewritten for it)."""
+    from rocas.analysis.diff import diff
+    from rocas.pipeline.substitution import second_opinion
+    from rocas.sim.engine import simulate
+
+    if run.done("confidence"):
+        return run.state["done"]["confidence"]
+    t0 = time.perf_counter()
+    scn = run.scenario
+    assert scn is not None
+    physical = run.state["done"]["physical"]
+    chosen_diff = run.state["done"]["diff"]
+    alternates = alternate_references(physical.get("front", []), physical["chosen"],
+                                      run.cfg.alternate_references)
+    answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
+                "module": chosen_diff["deviating_module"], "path": chosen_diff["path"]}]
+    diffs: list[Any] = [None]
+    for i, cand in enumerate(alternates, start=1):
+        path = run.out / f"reference_{i}.mcap"
+        simulate(apply_physical(scn, Mutation(dict(cand["mutation"]))), output=path)
+        found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s)
+        diffs.append(found)
+        answers.append({"reference": path.name, "mutation": cand["mutation"],
+                        "module": found.deviating_module, "path": found.to_json()["path"]})
+    agree = agreement([a["module"] for a in answers])
+    adopted = next(i for i, a in enumerate(answers) if a["module"] == agree["module"])
+    result: dict[str, Any] = {"agreement": agree, "answers": answers, "adopted": adopted}
+    simulations = len(alternates)
+    if adopted:
+        result["triggering_entity"] = triggering_entity(scn, Mutation(dict(answers[adopted]["mutation"])))
+        _adopt(run, answers[adopted], diffs[adopted])
+        simulations += 1
+    stance = None
+    if run.cfg.second_opinion:
+        opinion = second_opinion(scn)
+        stance = opinion.stance(agree["module"])
+        result["second_opinion"] = {**opinion.to_dict(), "stance": stance}
+        simulations += len(opinion.runs) + 1
+    result["level"] = level(agree, stance)
+    result["note"] = note(result)
+    run.finish("confidence", result, time.perf_counter() - t0, simulations)
+    return result
+
+
+def triggering_entity(scn: Any, mutation: Mutation) -> dict[str, Any]:
+    """The triggering entity of a reference, as the physical phase words it."""
+    from rocas.pipeline.physical import describe, entity_kinds, mutated_entities, physical_space
+
+    space = physical_space(scn)
+    entity = mutated_entities(space, mutation)
+    return {"entity": entity[0] if entity else None,
+            "kind": entity_kinds(scn).get(entity[0]) if entity else None,
+            "entities": entity, "properties": describe(space, mutation)}
+
+
+def _adopt(run: Run, answer: dict[str, Any], found: Any) -> None:
+    """Make ``answer``'s reference the analysis's reference (the files later phases, the
+    report and the Rerun view read)."""
+    from rocas.sim.engine import simulate
+
+    assert run.scenario is not None
+    simulate(apply_physical(run.scenario, Mutation(dict(answer["mutation"]))),
+             output=run.out / "reference.mcap")
+    data = found.to_json()
+    write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
+    run.state["done"]["diff"] = {"deviating_module": data["deviating_module"], "path": data["path"],
+                                 "control_channel": data["control_channel"],
+                                 "adopted_from": answer["reference"]}
+
+
+def note(result: dict[str, Any]) -> str:
+    """The confidence in one sentence."""
+    agree = result["agreement"]
+    module = agree["module"]
+    text = f"{agree['same']} of {agree['runs']} references name {module or 'no module'}"
+    if agree["runner_up"]:
+        r = agree["runner_up"]
+        text += f" ({r['runs']} name{'s' if r['runs'] == 1 else ''} {r['module'] or 'no module'})"
+    if result.get("adopted"):
+        text += (f"; the chosen reference named "
+                 f"{result['answers'][0]['module'] or 'no module'}, so the majority's best-ranked "
+                 f"reference ({result['answers'][result['adopted']]['reference']}) is used")
+    second = result.get("second_opinion")
+    if second:
+        text += f"; {_STANCE_WORDS[second['stance']]}"
+        if second["stance"] == "disagrees" and second.get("module"):
+            text += f" ({second['module']})"
+    if result["level"] == "unstable":
+        text += ". Unstable: the module depends on which reference is compared; do not act on it alone"
+    return text + "."
