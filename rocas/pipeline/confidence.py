@@ -45,6 +45,8 @@ def alternate_references(front: list[dict[str, Any]], chosen: dict[str, Any], co
     properties than ``chosen`` and than each other."""
     seen = {tuple(sorted(chosen["mutation"]))}
     out: list[dict[str, Any]] = []
+    if count <= 0:
+        return out
     for c in front:
         key = tuple(sorted(c["mutation"]))
         if key in seen:
