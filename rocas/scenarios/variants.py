@@ -52,6 +52,7 @@ from rocas.scenarios.catalog import (
     mutate,
     scenario_toml,
 )
+from rocas.scenarios.families import FAMILIES as FAMILY_HELP
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 from rocas.scenarios.model import COLORS, VEHICLE_MODELS, Scenario
 from rocas.scenarios.transform import (
@@ -60,7 +61,7 @@ from rocas.scenarios.transform import (
     transform_scenario,
 )
 
-FAMILIES = ("jitter", "rotate", "mirror", "speed", "actors", "position", "mixed")
+FAMILIES = tuple(FAMILY_HELP)
 #: colours an actor may be given (red is left out: see the module docstring)
 _SAFE_COLORS = tuple(c for c in COLORS if c != "red")
 
@@ -307,8 +308,10 @@ def generate_variants(e: CatalogEntry, family: str, count: int, *, seed: int = 0
     kept: list[Variant] = []
     tried = invalid = crashed = holds = 0
     k = 0
+    # a moved world is a batch of its own: draw no more of them than are still wanted
+    per_world = family in ("rotate", "mirror", "mixed")
     while len(kept) < count and tried < max_tries:
-        n = min(batch, max_tries - tried)
+        n = min(batch, max_tries - tried, count - len(kept) if per_world else batch)
         drawn = []
         for i in range(k, k + n):
             try:
