@@ -118,6 +118,7 @@ def test_a_variant_file_reads_back_as_the_same_catalog_entry(rotated_a10, tmp_pa
     assert scenario_to_dict(back.reference_scenario)["traffic_lights"][1]["policy"]["mode"] == "fixed"
 
 
+@pytest.mark.slow
 def test_a_variant_the_fix_does_not_repair_is_not_kept():
     # position draws that move A5's crossing sedan by up to 4 m leave its narrow race
     # (docs/catalog.md: it must start within ~1.5 m); whatever is kept must still pass
