@@ -18,7 +18,7 @@ HELP = "find the triggering entity, the deviating module and the misconfiguratio
 def add_search_arguments(p: argparse.ArgumentParser,
                          seeded: str = "the searches and the validation variants") -> None:
     """The options of an analysis that ``rocas bench`` passes on too (defaults as in
-    :class:`rocas.pipeline.analyze.AnalyzeConfig`); ``seeded`` says what --seed seeds."""
+    :class:`rocas.pipeline.config.AnalyzeConfig`); ``seeded`` says what --seed seeds."""
     p.add_argument("--seed", type=int, default=0, help=f"seed of {seeded} (default 0)")
     p.add_argument("--budget", type=int, default=240,
                    help="simulations per search phase; the cyber phase's screening (up to two per "
@@ -53,7 +53,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.pipeline.analyze import AnalyzeConfig, analyze, validation_simulations
+    from rocas.pipeline.analyze import analyze
+    from rocas.pipeline.config import AnalyzeConfig
+    from rocas.pipeline.validation import validation_simulations
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, population=args.population, scope=args.scope,
                         executor=args.executor, workers=args.workers, delta_s=args.delta,

@@ -27,8 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.pipeline.analyze import AnalyzeConfig
     from rocas.pipeline.bench import run_bench
+    from rocas.pipeline.config import AnalyzeConfig
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation, screening=args.screening)

@@ -1,5 +1,6 @@
 """The analysis pipeline: replay, physical mutation, diff, cyber mutation, validation."""
 
-from rocas.pipeline.analyze import PHASES, VERDICTS, AnalyzeConfig, analyze
+from rocas.pipeline.analyze import analyze
+from rocas.pipeline.config import PHASES, VERDICTS, AnalyzeConfig
 
 __all__ = ["PHASES", "VERDICTS", "AnalyzeConfig", "analyze"]

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from rocas.errors import UsageError
-from rocas.pipeline.analyze import AnalyzeConfig, analyze
+from rocas.pipeline.analyze import analyze
+from rocas.pipeline.config import AnalyzeConfig
 
 
 def _expected(truth: Any) -> dict[str, Any]:

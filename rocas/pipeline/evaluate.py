@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -99,3 +100,24 @@ def violation(outcome: Outcome) -> float:
     if outcome.emergency:
         return 1.0 + max(0.0, outcome.max_decel_mps2 - 4.0) / 4.0
     return -min(max(outcome.min_separation_m, 0.0), 2.0) / 2.0
+
+
+@dataclass(frozen=True)
+class Accident:
+    """The accident of a run: kind ("collision" or "emergency"), time [s], other party."""
+
+    kind: str
+    time_s: float
+    other: str | None
+
+    @classmethod
+    def of(cls, o: Outcome) -> Accident | None:
+        if o.collided:
+            return cls("collision", float(o.collision_time_s or 0.0), o.collision_with)
+        if o.emergency:
+            times = [t for t in (o.hard_brake_time_s, o.estop_time_s) if t is not None]
+            return cls("emergency", float(min(times)) if times else 0.0, None)
+        return None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": self.kind, "time_s": round(self.time_s, 3), "other": self.other}

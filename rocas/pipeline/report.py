@@ -44,7 +44,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     trig = physical.get("triggering_entity")
     module = diff.get("deviating_module")
     mis = cyber.get("misconfiguration", [])
-    from rocas.pipeline.analyze import REPORT_SETTINGS, AnalyzeConfig
+    from rocas.pipeline.config import REPORT_SETTINGS, AnalyzeConfig
     from rocas.pipeline.cyber import cyber_space
 
     searched = cyber.get("parameters")

@@ -115,7 +115,7 @@ def test_progress_shows_the_best_accident_free_value_so_far():
 def test_the_generation_record_has_its_best_accident_free_second_objective():
     import numpy as np
 
-    from rocas.pipeline.analyze import _gen_info
+    from rocas.pipeline.common import gen_info as _gen_info
     from rocas.search.ga import GenerationStats
 
     objs = np.array([[0.1, 3.0], [0.2, 1.5], [0.0, 0.5]])
@@ -176,7 +176,7 @@ def test_the_shared_search_options_default_to_the_analysis_defaults():
     import argparse
 
     from rocas.cli.analyze import add_search_arguments
-    from rocas.pipeline.analyze import AnalyzeConfig
+    from rocas.pipeline.config import AnalyzeConfig
 
     p = argparse.ArgumentParser()
     add_search_arguments(p)
@@ -226,7 +226,7 @@ def test_the_interrupt_message_says_what_is_on_disk(rocas, monkeypatch, tmp_path
     assert "--resume --rrd" in res.stderr and "no output was written" not in res.stderr
     # stopped before a phase finished: the folder it made is gone, and the message says so
     with monkeypatch.context() as m:
-        m.setattr(pipeline, "_phase_replay", interrupt)
+        m.setattr(pipeline, "phase_replay", interrupt)
         res = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "new", *SMALL)
     assert res.code == 130 and "nothing was kept" in res.stderr
     assert not (tmp_path / "new").exists()

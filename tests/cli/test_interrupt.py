@@ -157,7 +157,7 @@ def test_sigterm_keeps_the_finished_phases_of_an_analysis(rocas, monkeypatch, tm
     out = tmp_path / "run"
     args = ["analyze", "roundabout_red_truck", "--scenario", "--out", out, "--budget", "16",
             "--population", "8", "--validation", "4", "--workers", "1", "--json"]
-    _terminate_after(monkeypatch, "rocas.pipeline.analyze._phase_diff", 0)
+    _terminate_after(monkeypatch, "rocas.pipeline.analyze.phase_diff", 0)
     res = rocas(*args)
     assert res.code == 143, res.stderr
     assert f"kept in {out}; continue with --resume" in _only_line(res.stderr)

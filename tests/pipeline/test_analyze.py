@@ -8,7 +8,7 @@ import pytest
 
 from rocas.errors import OutputError, UsageError
 from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
-from rocas.pipeline.analyze import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
+from rocas.pipeline.validation import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
 from rocas.search import LocalExecutor, SerialExecutor
 
@@ -188,7 +188,7 @@ def test_a_run_that_stops_before_any_phase_finished_leaves_no_folder_it_made(red
 def test_the_input_is_identified_by_content(red_truck, serial_run, tmp_path):
     import shutil
 
-    from rocas.pipeline.analyze import source_identity
+    from rocas.pipeline.rundir import source_identity
 
     a, b = tmp_path / "a.mcap", tmp_path / "b.mcap"
     a.write_bytes(b"same bytes")
@@ -222,7 +222,7 @@ def test_a_settings_mismatch_names_the_settings(red_truck, serial_run):
 def test_temporaries_a_killed_run_left_are_debris(red_truck, serial_run, tmp_path):
     import shutil
 
-    from rocas.pipeline.analyze import prepare_run_dir
+    from rocas.pipeline.rundir import prepare_run_dir
 
     # killed during the replay: nothing but a temporary
     out = tmp_path / "killed"
@@ -247,7 +247,7 @@ def test_temporaries_a_killed_run_left_are_debris(red_truck, serial_run, tmp_pat
 
 
 def test_the_report_names_the_settings_that_produced_it(serial_run):
-    from rocas.pipeline.analyze import REPORT_SETTINGS
+    from rocas.pipeline.config import REPORT_SETTINGS
 
     out, report = serial_run
     assert report["settings"] == {k: getattr(CFG, k) for k in REPORT_SETTINGS}
@@ -285,7 +285,7 @@ def test_a_damaged_run_directory_is_an_input_error(red_truck, serial_run, tmp_pa
 
 
 def test_the_budget_rule_and_the_planned_simulations():
-    from rocas.pipeline.analyze import planned_simulations
+    from rocas.pipeline.config import planned_simulations
 
     default = AnalyzeConfig()
     # the defaults as before: 7 cyber generations after a 36-parameter screening

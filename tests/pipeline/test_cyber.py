@@ -43,7 +43,7 @@ def test_sensing_limits_may_only_grow():
 
 
 def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory():
-    from rocas.pipeline.analyze import _first_fix, _fix_candidates, _nearest_fix
+    from rocas.pipeline.cyber_phase import _first_fix, _fix_candidates, _nearest_fix
     from rocas.search.ga import Candidate, SearchResult
 
     def cand(values, h1, h2, ok=True):
@@ -73,7 +73,7 @@ def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory
 
 
 def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are_kept():
-    from rocas.pipeline.analyze import _smallest_fix
+    from rocas.pipeline.cyber_phase import _smallest_fix
 
     dist = Mutation({"planning.min_overtake_distance_m": 1.64})
     buf = Mutation({"planning.overtake_time_buffer_s": 0.82})
@@ -89,7 +89,7 @@ def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are
 
 
 def test_an_equally_small_fix_that_keeps_the_ego_farther_away_wins():
-    from rocas.pipeline.analyze import _smallest_fix
+    from rocas.pipeline.cyber_phase import _smallest_fix
 
     # A3: lowering the overtake margin lets the ego race ahead of the truck (4.7 m gap);
     # raising it makes the ego yield (6.9 m): as small a change, and the repair
@@ -110,7 +110,7 @@ def test_an_equally_small_fix_that_keeps_the_ego_farther_away_wins():
 
 
 def test_a_fix_is_known_only_when_its_whole_batch_has_run():
-    from rocas.pipeline.analyze import _first_fix, _first_fix_batch
+    from rocas.pipeline.cyber_phase import _first_fix, _first_fix_batch
     from rocas.search.ga import Candidate, GenerationStats, SearchResult
 
     def cand(name, gen, ok):

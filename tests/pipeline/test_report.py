@@ -1,6 +1,6 @@
 """The report's words for what the run directory's state says."""
 
-from rocas.pipeline.analyze import Accident
+from rocas.pipeline.evaluate import Accident
 from rocas.pipeline.report import build_report, markdown, replay_text
 
 

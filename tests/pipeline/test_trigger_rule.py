@@ -2,8 +2,8 @@
 
 
 def test_the_trigger_rule_prefers_changing_a_property_to_removing_the_entity():
-    from rocas.pipeline.analyze import _choose_trigger
     from rocas.pipeline.physical import physical_space
+    from rocas.pipeline.physical_phase import _choose_trigger
     from rocas.scenarios.catalog import entry
     from rocas.search.ga import Candidate, SearchResult
     from rocas.search.space import Mutation
@@ -23,8 +23,8 @@ def test_the_similarity_margin_scales_with_f2():
     """f2 is a mean squared distance: on A3 the fog (f2 21.0 m^2) and the truck's speed
     (25.8 m^2) are equally similar references at that scale, and the truck, close and in front
     of the ego, is the more suspicious; at small f2 the margin stays 1 m^2."""
-    from rocas.pipeline.analyze import F2_TOLERANCE_M2, _choose_trigger, f2_tolerance
     from rocas.pipeline.physical import physical_space
+    from rocas.pipeline.physical_phase import F2_TOLERANCE_M2, _choose_trigger, f2_tolerance
     from rocas.scenarios.catalog import entry
     from rocas.search.ga import Candidate, SearchResult
     from rocas.search.space import Mutation

@@ -7,14 +7,14 @@ import json
 import pytest
 
 from rocas.pipeline import AnalyzeConfig, analyze
-from rocas.pipeline.analyze import (
+from rocas.pipeline.cyber import cyber_space
+from rocas.pipeline.validation import (
     ROBUST_TOLERANCE,
     STRONGER_FRACTIONS,
     _robust,
     stronger_fixes,
     validation_simulations,
 )
-from rocas.pipeline.cyber import cyber_space
 from rocas.scenarios import load_example
 from rocas.search import SerialExecutor
 
@@ -91,7 +91,7 @@ def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not
 def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_path, monkeypatch):
     import shutil
 
-    analyze_module = importlib.import_module("rocas.pipeline.analyze")  # the name is also a function
+    analyze_module = importlib.import_module("rocas.pipeline.validation")
     monkeypatch.setattr(analyze_module, "VALIDATION_SLICE_BATCHES", 1)  # slices of 32 simulations
     red_truck = load_example("roundabout_red_truck")
     cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=12)

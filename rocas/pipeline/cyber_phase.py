@@ -1,0 +1,218 @@
+"""Phase IV: the cyber search over the deviating module's parameters, then minimisation."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from rocas._fs import write_text_atomic
+from rocas.pipeline.common import Scores, cand_json, gen_info, gen_json
+from rocas.pipeline.config import planned_simulations, screening_simulations
+from rocas.pipeline.evaluate import VariantResult, VariantTask, evaluate, params_tuple, violation
+from rocas.pipeline.rundir import Run, jsonable
+from rocas.search.ga import Candidate, SearchResult, run_search
+from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
+from rocas.search.objectives import ego_dissimilarity
+from rocas.search.space import Mutation
+
+
+def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
+    from rocas.sim.engine import simulate
+
+    if run.done("cyber"):
+        return run.state["done"]["cyber"]
+    t0 = time.perf_counter()
+    scn, orig = run.scenario, run.original
+    assert scn is not None and orig is not None
+    space = run.cyber_space(module)
+    search = run.cfg.search(2, len(space.variables))
+    screening = screening_simulations(space, search.seed) if search.screen else 0
+    run.progress("cyber", {"planned": planned_simulations(search, screening)})
+    horizon = run.h1_horizon
+
+    def overrides(m: Mutation) -> tuple[tuple[str, float], ...]:
+        return params_tuple({k: float(v) for k, v in m.values.items()})
+
+    def run_fixes(ms: list[Mutation]) -> list[VariantResult]:
+        tasks = [VariantTask(scn, overrides(m), scn.seed) for m in ms]
+        return evaluate(run.executor, tasks, run.cfg.batch_size)
+
+    # each simulated fix's smallest gap to anything [m], for choosing among shrunk fixes
+    separation: dict[Mutation, float] = {}
+
+    def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        out = []
+        for m, r in zip(ms, run_fixes(ms), strict=True):
+            separation[m] = r.outcome.min_separation_m
+            out.append(((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), space.distance(m)),
+                        violation(r.outcome)))
+        return out
+
+    originals = {v.name: float(v.original) for v in space.variables}
+    res = run_search(space, batch, search, 2,
+                     checkpoint=run.out / "cyber.ckpt",
+                     on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")))
+    result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
+                              "generations": [gen_json(g, "h2") for g in res.generations],
+                              "evaluations": res.evaluations, "feasible": len(res.feasible),
+                              "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
+                              "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals)
+    nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
+    if nearest is not None:
+        result["nearest_fix"] = cand_json(nearest)
+    evaluations = res.evaluations
+    if candidates:
+        # the search ranks fixes by the size it happened to try; each of the best few is shrunk
+        # (set, then magnitudes) and the smallest shrunk fix wins
+        run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
+        # candidates often shrink through the same mutations, and the search has already
+        # scored many of them; the candidates shrink in lockstep, one batch per round
+        scores = Scores(batch, res.candidates)
+        limits = [max(run.cfg.h1_limit_m2, c.objectives[0]) for c in candidates]
+
+        def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
+            return [cons <= 0.0 and objs[0] <= limits[i]
+                    for (i, _), (objs, cons) in zip(trials, scores.of([m for _, m in trials]),
+                                                    strict=True)]
+
+        smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
+        smalls, _ = shrink_all_magnitudes(smalls, space, holds)
+        evaluations += scores.simulated
+        # every shrunk fix was simulated by the search or as a trial, and counted there; only a
+        # search resumed from its checkpoint lacks the gaps of its earlier generations, and
+        # re-running those is the resume's cost, not the analysis's (the report stays the same)
+        unseen = [m for m in dict.fromkeys(smalls) if m not in separation]
+        if unseen:
+            batch(unseen)
+        best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
+                                   separation=[separation[m] for m in smalls],
+                                   originals=originals)
+        small, chosen = smalls[best], candidates[best]
+        result["search_best"] = cand_json(chosen)
+        result["minimise_evaluations"] = scores.simulated
+        result["shrunk_candidates"] = [
+            {"search": cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
+             "h2": round(space.distance(m), 6),
+             # None when nothing was ever near (no actor or object): JSON has no infinity
+             "min_separation_m": separation[m] if np.isfinite(separation[m]) else None}
+            for c, m in zip(candidates, smalls, strict=True)]
+        result["fix"] = {k: float(v) for k, v in small.values.items()}
+
+        def described(m: Mutation) -> list[dict[str, Any]]:
+            return [{"module": n.split(".", 1)[0], "parameter": n,
+                     "original": space.variable(n).original, "mutated": m.values[n]}
+                    for n in m.names]
+
+        result["misconfiguration"] = described(small)
+        result["alternatives"] = [{"h2": round(space.distance(smalls[i]), 6),
+                                   "misconfiguration": described(smalls[i])} for i in near]
+        simulate(scn, params=result["fix"], output=run.out / "fixed.mcap")
+    write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=jsonable))
+    run.finish("cyber", result, time.perf_counter() - t0, evaluations)
+    (run.out / "cyber.ckpt").unlink(missing_ok=True)
+    return result
+
+
+#: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter
+#: moved 5 % of its range farther than the chosen fix)
+ALTERNATIVE_H2_TOLERANCE = 0.05
+
+
+def _smallest_fix(h2: list[float], fixes: list[Mutation],
+                  tolerance: float = ALTERNATIVE_H2_TOLERANCE,
+                  separation: list[float] | None = None,
+                  originals: Mapping[str, float] | None = None) -> tuple[int, list[int]]:
+    """Index of the chosen shrunk fix, and the indices of the other fixes (other parameter
+    sets, or the same parameters moved the other way) within ``tolerance`` of the smallest
+    h2, in order: the same margin expressed in another parameter, or a second suspect.
+
+    The smallest fix (h2, ties by parameter names) is chosen, unless another fix within
+    ``tolerance`` of it keeps the ego farther from everything (``separation``: the run's
+    smallest gap to any actor or object [m], 0.5 m more or better): such changes are
+    equally small, and the one that adds margin is the repair, not the one that avoids the
+    accident narrowly (an overtake margin lowered until the ego races ahead of the truck)."""
+    order = sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names))
+    close = [i for i in order if h2[i] <= h2[order[0]] + tolerance]
+    best = order[0]
+    if separation is not None:
+        widest = max(close, key=lambda i: (separation[i], -h2[i]))
+        if separation[widest] >= separation[best] + SEPARATION_MARGIN_M:
+            best = widest
+
+    def kind(m: Mutation) -> Any:
+        return m.names if originals is None else _direction(m, originals)
+
+    seen = {kind(fixes[best])}
+    near = []
+    for i in close:
+        if kind(fixes[i]) not in seen:
+            seen.add(kind(fixes[i]))
+            near.append(i)
+    return best, near
+
+
+#: how much wider [m] an equally small fix must keep the ego's smallest gap to be preferred
+SEPARATION_MARGIN_M = 0.5
+
+
+def _first_fix(res: SearchResult, h1_limit: float) -> int | None:
+    """How many simulations the search ran up to its first fix: a candidate that avoids the
+    accident and keeps the ego's earlier trajectory (h1 within the limit), i.e. one that
+    :func:`_fix_candidates` would accept as it stands."""
+    for i, c in enumerate(res.candidates, 1):
+        if c.feasible and c.objectives[0] <= h1_limit:
+            return i
+    return None
+
+
+def _first_fix_batch(res: SearchResult, h1_limit: float) -> int | None:
+    """How many simulations had run when the first fix became known: a generation (the
+    screening too) is evaluated as one batch, so its every simulation is paid before any of its
+    results is in. Unlike :func:`_first_fix` this does not depend on where in its batch the
+    fix happened to sit."""
+    i = _first_fix(res, h1_limit)
+    if i is None:
+        return None
+    gen = res.candidates[i - 1].generation
+    return next((g.evaluations for g in res.generations if g.generation == gen), i)
+
+
+def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
+                    originals: Mapping[str, float] | None = None) -> list[Candidate]:
+    """The best ``count`` feasible fixes with distinct parameter sets or directions (up or
+    down from ``originals``): those that keep the ego's earlier trajectory (h1 <= limit), by
+    smallest change (h2). None when no fix keeps it: a configuration that avoids the accident
+    only by driving differently before it is not a fix (:func:`_nearest_fix` records it)."""
+    originals = originals or {}
+    keep = [c for c in res.feasible if c.objectives[0] <= h1_limit]
+    out: list[Candidate] = []
+    seen: set[tuple[tuple[str, int], ...]] = set()
+    for c in sorted(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names)):
+        key = _direction(c.mutation, originals)
+        if key not in seen:
+            seen.add(key)
+            out.append(c)
+        if len(out) == count:
+            break
+    return out
+
+
+def _nearest_fix(res: SearchResult, h1_limit: float) -> Candidate | None:
+    """When every accident-free configuration changes the ego's earlier trajectory beyond
+    ``h1_limit``, the one that changes it least; else None."""
+    feasible = res.feasible
+    if not feasible or any(c.objectives[0] <= h1_limit for c in feasible):
+        return None
+    return min(feasible, key=lambda c: (c.objectives[0], c.objectives[1], c.mutation.names))
+
+
+def _direction(m: Mutation, originals: Mapping[str, float]) -> tuple[tuple[str, int], ...]:
+    """A fix's parameters with the sign of each change: raising a margin and lowering it are
+    different fixes."""
+    return tuple((n, int(np.sign(float(m.values[n]) - float(originals[n]))) if n in originals
+                  else 0) for n in m.names)

@@ -1,0 +1,59 @@
+"""Phase I: the accident replayed (a recording) or simulated (a scenario)."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+from rocas._fs import write_text_atomic
+from rocas.errors import ScenarioError
+from rocas.pipeline.evaluate import Accident, VariantTask, evaluate, is_accident
+from rocas.pipeline.rundir import Run, damaged
+from rocas.scenarios.model import Scenario
+
+
+def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) -> None:
+    from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
+    from rocas.sim.engine import simulate
+
+    if run.done("replay"):
+        try:
+            run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
+        except OSError as exc:
+            raise damaged(run.out, "scenario.json", f"cannot be read ({exc.strerror or exc})") from None
+        except (ValueError, ScenarioError) as exc:  # JSONDecodeError and UnicodeDecodeError too
+            raise damaged(run.out, "scenario.json", f"is not a valid scenario ({exc})") from None
+    else:
+        t0 = time.perf_counter()
+        result: dict[str, Any] = {}
+        if recording is not None:
+            import rocas.replay as replay_mod
+
+            recon = replay_mod.reconstruct(recording)
+            report = replay_mod.replay(recon, output=run.out / "accident.mcap")
+            scenario = recon.scenario
+            # the replay figures of the report: the recorded accident (None: the recording
+            # holds none), the replay's, and how closely the ego followed its recorded pose
+            result = {"source": "recording", "reproduced": bool(report.reproduced),
+                      "recorded_accident": report.original.to_dict() if report.original else None,
+                      "accident": report.accident.to_dict() if report.accident else None,
+                      "ego_rmse_m": report.ego_rmse_m, "compared_until_s": report.compared_until_s}
+        else:
+            assert scenario is not None
+            res = simulate(scenario, output=run.out / "accident.mcap")
+            acc = Accident.of(res.outcome)
+            result = {"source": "scenario", "reproduced": is_accident(res.outcome),
+                      "recorded_accident": None, "accident": acc.to_json() if acc else None,
+                      "ego_rmse_m": 0.0}
+        run.scenario = scenario
+        write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
+        write_text_atomic(run.out / "replay.json", json.dumps(result, indent=1))
+        run.finish("replay", result, time.perf_counter() - t0, 1)
+    # the original run's trajectories are re-simulated (deterministic) rather than stored
+    (orig,) = evaluate(run.executor, [VariantTask(run.scenario, (), run.scenario.seed)])
+    run.original = orig
+    run.accident = Accident.of(orig.outcome)
+    dt = run.scenario.dt_s
+    run.accident_tick = int(round(run.accident.time_s / dt)) if run.accident else 0
