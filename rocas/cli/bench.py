@@ -23,25 +23,45 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="entries also analysed with --scope all (default 3)")
     p.add_argument("--instances", type=int, default=0, metavar="K",
                    help="also analyse K generated variants per type and report accuracy")
+    p.add_argument("--seeds", metavar="S,S,...", type=_seed_list,
+                   help="run the bench once per seed (e.g. 0,1,2,3,4; instead of --seed) and print "
+                        "the hits per seed and per entry")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _seed_list(text: str) -> list[int]:
+    try:
+        seeds = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of seeds: {text!r}") from None
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"seeds are whole numbers of at least 0: {text!r}")
+    return seeds
+
+
 def run(args: argparse.Namespace, env: Env) -> int:
-    from rocas.pipeline.bench import run_bench
+    from rocas.pipeline.bench import run_bench, run_bench_seeds
     from rocas.pipeline.config import AnalyzeConfig
 
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation, screening=args.screening)
+    kwargs: dict[str, Any] = {"recordings": Path(args.recordings), "compare_scope": args.compare_scope,
+                              "instances": args.instances,
+                              "progress": lambda msg: print(msg, file=env.stderr, flush=True)}
     try:
-        res = run_bench(args.ids, Path(args.out), cfg, recordings=Path(args.recordings),
-                        compare_scope=args.compare_scope, instances=args.instances,
-                        progress=lambda msg: print(msg, file=env.stderr, flush=True))
+        res = (run_bench_seeds(args.ids, Path(args.out), cfg, args.seeds, **kwargs) if args.seeds
+               else run_bench(args.ids, Path(args.out), cfg, **kwargs))
     except KeyboardInterrupt as exc:
         exc.kept = (f"finished analyses and phases are kept in {args.out}; "  # type: ignore[attr-defined]
                     "the same command resumes them")
         raise
     if args.json:
         env.stdout.write(json.dumps(res, indent=2) + "\n")
+    elif args.seeds:
+        for seed, one in zip(args.seeds, res["runs"], strict=True):
+            env.out().print(f"[bold]Seed {seed}[/bold]")
+            render(one, env)
+        render_seeds(res, env)
     else:
         render(res, env)
     return 0
@@ -91,6 +111,24 @@ def render(res: dict, env: Env) -> None:
                     else " (no fix exists to check)")
         con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash{repaired}; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")
+
+
+def render_seeds(res: dict, env: Env) -> None:
+    """Hits per entry and seed, and per seed."""
+    from rich.table import Table
+
+    seeds = [str(s) for s in res["seeds"]]
+    t = Table(title=f"Hits per seed: {res['every_seed']} of {res['total']} entries hit at every seed")
+    t.add_column("id")
+    for s in seeds:
+        t.add_column(f"seed {s}")
+    for row in res["entries"]:
+        t.add_row(row["type"], *(f"{_mark(row['hits'][s])} {row['found'][s]['module'] or '—'}"
+                                 for s in seeds))
+    t.add_row("hits", *(f"{res['hits_per_seed'][s]} of {res['total']}" for s in seeds))
+    env.out().print(t)
+    if res["median_seconds"] is not None:
+        env.out().print(f"Median rocas analyze: {res['median_seconds']:.1f} s")
 
 
 def _ratio(a: float | None, b: float | None) -> str:

@@ -177,3 +177,36 @@ def run_bench(
         "scope_comparison": comparison,
         "instances": per_type,
     }
+
+
+def run_bench_seeds(
+    ids: Sequence[str] | None,
+    out: Path,
+    cfg: AnalyzeConfig,
+    seeds: Sequence[int],
+    **kwargs: Any,
+) -> dict[str, Any]:
+    """:func:`run_bench` once per seed in ``seeds`` (run directories under ``out/seed-S``);
+    returns the ``--json`` object: each seed's bench (``runs``), the hits per seed, and per
+    entry the seeds it hit at (an answer that changes with the seed is not an answer)."""
+    if not seeds:
+        raise UsageError("--seeds needs at least one seed", "e.g. --seeds 0,1,2")
+    if len(set(seeds)) != len(seeds):
+        raise UsageError(f"--seeds repeats a seed: {','.join(map(str, seeds))}", "name each seed once")
+    runs = [run_bench(ids, out / f"seed-{s}", replace(cfg, seed=s), **kwargs) for s in seeds]
+    per_entry: dict[str, dict[str, Any]] = {}
+    for s, res in zip(seeds, runs, strict=True):
+        for r in res["entries"]:
+            row = per_entry.setdefault(r["id"], {"id": r["id"], "type": r["type"], "hits": {},
+                                                 "found": {}})
+            row["hits"][str(s)] = r["hit"]
+            row["found"][str(s)] = {"module": r["found"]["deviating_module"],
+                                    "parameters": r["found"]["parameters"],
+                                    "trigger": r["found"]["trigger_entity"]}
+    seconds = sorted(r["seconds"] for res in runs for r in res["entries"])
+    return {"seeds": list(seeds), "runs": runs,
+            "hits_per_seed": {str(s): res["hits"] for s, res in zip(seeds, runs, strict=True)},
+            "total": runs[0]["total"],
+            "entries": list(per_entry.values()),
+            "every_seed": sum(all(row["hits"].values()) for row in per_entry.values()),
+            "median_seconds": seconds[len(seconds) // 2] if seconds else None}

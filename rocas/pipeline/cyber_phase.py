@@ -53,9 +53,14 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
         return out
 
     originals = {v.name: float(v.original) for v in space.variables}
+    limit = run.cfg.h1_limit_m2
+    # a fix among the screened single parameters ends the search there: the fix is then chosen
+    # from what every seed screens alike (the genetic search runs only when none is a fix)
     res = run_search(space, batch, search, 2,
                      checkpoint=run.out / "cyber.ckpt",
-                     on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")))
+                     on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")),
+                     screening_suffices=lambda cands: any(c.feasible and c.objectives[0] <= limit
+                                                          for c in cands))
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
                               "generations": [gen_json(g, "h2") for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),

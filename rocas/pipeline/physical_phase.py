@@ -1,11 +1,31 @@
-"""Phase II: the physical search for the triggering entity and the accident-free reference."""
+"""Phase II: the physical search for the triggering entity and the accident-free reference.
+
+The search is made to give the same answer at every seed. It starts with a screening: every
+single-property mutant of the world (:func:`~rocas.pipeline.physical.screening_mutants`: each
+enum choice, the flipped bool, reals at four points of their range, speed changes from the
+start and from :data:`ONSET_LEAD_S` before the accident) is simulated once. When one of them
+avoids the accident, the reference is chosen among them by a fixed rule
+(:func:`choose_reference`) and the genetic search does not run: the answer does not depend on
+the seed. Only when none does, the genetic search (seeded) looks for combinations. The chosen
+reference is then shrunk towards the original world while it still avoids the accident and
+ranks as well under the rule.
+
+The objectives of every simulated world (minimised): f1 suspiciousness of the mutated
+entities, f2 dissimilarity of the *other* actors' trajectories up to the accident (the
+paper's definition: the ego is not one of them), f3 size of the change, and f4 = minus the
+shared prefix [s]: how long the reference stays identical to the accident as the ego could
+see it (the ego's trajectory, and the actors while within :data:`VISIBLE_M` of it).
+"""
 
 from __future__ import annotations
 
 import json
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
+
+import numpy as np
 
 from rocas import numerics
 from rocas._fs import write_text_atomic
@@ -17,14 +37,44 @@ from rocas.pipeline.physical import (
     describe,
     entity_kinds,
     entity_positions,
+    is_weather,
     mutated_entities,
     physical_space,
+    screening_mutants,
 )
 from rocas.pipeline.rundir import Run, jsonable
-from rocas.search.ga import Candidate, SearchResult, run_search
-from rocas.search.minimize import shrink_set
+from rocas.search.ga import Candidate, GenerationStats, run_search
+from rocas.search.minimize import shrink_magnitudes, shrink_set
 from rocas.search.objectives import scenario_dissimilarity, suspiciousness
 from rocas.search.space import Mutation, MutationSpace
+
+#: the screening also tries each speed change from this long before the accident [s]
+ONSET_LEAD_S = 4.0
+#: an actor that moves differently farther than this from the ego does not count against the
+#: shared prefix [m] (the built-in perception's default range)
+VISIBLE_M = 80.0
+#: two positions closer than this are the same [m]
+SAME_POSITION_M = 1e-6
+#: a reference that departs from the accident earlier than this [s] is an early one
+#: (:func:`choose_reference` prefers the others)
+EARLY_S = 1.0
+
+
+def shared_prefix_s(original: VariantResult, mutated: VariantResult, dt_s: float, upto: int) -> float:
+    """How long [s] ``mutated`` stays identical to ``original`` as the ego sees it, up to tick
+    ``upto``: until the ego's position departs, or an actor's while it is within VISIBLE_M of
+    the ego (an entity changed before the ego can see it leaves the executions the same)."""
+    n = min(upto, len(original.ego_xy), len(mutated.ego_xy))
+    ego = original.ego_xy[:n]
+    d_ego = np.hypot(*(mutated.ego_xy[:n] - ego).T)
+    departed = d_ego > SAME_POSITION_M
+    if original.actors_xy.shape[1]:
+        act = original.actors_xy[:n]
+        d_act = np.hypot(act[..., 0] - mutated.actors_xy[:n, :, 0], act[..., 1] - mutated.actors_xy[:n, :, 1])
+        near = np.hypot(act[..., 0] - ego[:, None, 0], act[..., 1] - ego[:, None, 1]) <= VISIBLE_M
+        departed |= ((d_act > SAME_POSITION_M) & near).any(axis=1)
+    first = int(np.argmax(departed)) if departed.any() else n
+    return first * dt_s
 
 
 def phase_physical(run: Run) -> dict[str, Any]:
@@ -32,11 +82,12 @@ def phase_physical(run: Run) -> dict[str, Any]:
 
     if run.done("physical"):
         return run.state["done"]["physical"]
-    run.progress("physical", {"planned": planned_simulations(run.cfg.search(1))})
     t0 = time.perf_counter()
     scn, orig, tick = run.scenario, run.original, run.accident_tick
-    assert scn is not None and orig is not None
+    assert scn is not None and orig is not None and run.accident is not None
     space = physical_space(scn)
+    screening = screening_mutants(space, (0.0, max(0.0, run.accident.time_s - ONSET_LEAD_S)))
+    run.progress("physical", {"planned": len(screening)})
     positions = entity_positions(scn, orig.actors_xy[min(tick, len(orig.actors_xy) - 1)])
     ego_xy = tuple(orig.ego_xy[tick])
     prev = orig.ego_xy[max(tick - 1, 0)]
@@ -47,35 +98,56 @@ def phase_physical(run: Run) -> dict[str, Any]:
     def objectives(m: Mutation, r: VariantResult) -> tuple[tuple[float, ...], float]:
         ents = mutated_entities(space, m)
         f1 = suspiciousness([positions.get(e) for e in ents], ego_xy, heading, run.cfg.k_suspicion)
-        # f2 over every actor and the ego: a reference in which the ego already drives
-        # differently long before the accident is a poor reference for the diff
-        f2 = scenario_dissimilarity(
-            {"ego": orig.ego_xy[:upto], **{a: orig.actors_xy[:upto, i] for i, a in enumerate(actor_ids)}},
-            {"ego": r.ego_xy[:upto], **{a: r.actors_xy[:upto, i] for i, a in enumerate(actor_ids)}})
-        return (f1, f2, space.distance(m)), violation(r.outcome)
+        f2 = scenario_dissimilarity({a: orig.actors_xy[:upto, i] for i, a in enumerate(actor_ids)},
+                                    {a: r.actors_xy[:upto, i] for i, a in enumerate(actor_ids)})
+        f4 = -shared_prefix_s(orig, r, scn.dt_s, upto)
+        return (f1, f2, space.distance(m), f4), violation(r.outcome)
 
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         tasks = [VariantTask(apply_physical(scn, m), (), scn.seed) for m in ms]
         return [objectives(m, r) for m, r in zip(ms, evaluate(run.executor, tasks, run.cfg.batch_size),
                                                  strict=True)]
 
-    res = run_search(space, batch, run.cfg.search(1), 3, checkpoint=run.out / "physical.ckpt",
-                     on_generation=lambda s: run.progress("physical", gen_info(s, "f2")))
-    chosen = _choose_trigger(res, space)
-    result: dict[str, Any] = {"generations": [gen_json(g, "f2") for g in res.generations],
-                              "evaluations": res.evaluations, "feasible": len(res.feasible),
-                              "front": [cand_json(c) for c in res.front[:20]]}
-    evaluations = res.evaluations
+    # the screening (generation 0): every single-property mutant, simulated once
+    screened = [Candidate(m, tuple(o), float(c), 0) for m, (o, c) in zip(screening, batch(screening),
+                                                                        strict=True)]
+    stats = _stats(0, screened)
+    run.progress("physical", gen_info(stats, "f2"))
+    candidates, generations = list(screened), [stats]
+    result: dict[str, Any] = {"screening": len(screened),
+                              "screening_feasible": sum(c.feasible for c in screened)}
+    if not any(c.feasible for c in screened):
+        # no single property avoids the accident: the genetic search looks for combinations
+        search = run.cfg.search(1)
+        run.progress("physical", {"planned": len(screened) + planned_simulations(search)})
+
+        def on_generation(s: GenerationStats) -> None:
+            run.progress("physical", gen_info(replace(s, evaluations=s.evaluations + len(screened)), "f2"))
+
+        res = run_search(space, batch, search, 4, checkpoint=run.out / "physical.ckpt",
+                         on_generation=on_generation)
+        candidates += res.candidates
+        generations += res.generations
+    result["search"] = "screening" if len(candidates) == len(screened) else "genetic"
+    feasible = [c for c in candidates if c.feasible]
+    chosen = choose_reference(feasible, space)
+    result |= {"generations": [gen_json(g, "f2") for g in generations],
+               "evaluations": len(candidates), "feasible": len(feasible),
+               "front": [cand_json(c) for c in _ranked(feasible, space)[:20]]}
+    evaluations = len(candidates)
     if chosen is not None:
-        # drop properties the avoidance does not need (a search often carries passengers,
-        # e.g. a 0.0001 m move of a bystander), keeping the reference as similar as chosen
-        f2_limit = f2_tolerance(chosen.objectives[1])
-        scores = Scores(batch, res.candidates)
+        # shrink the reference towards the original: drop properties the avoidance does not
+        # need, then move each real change back while it still avoids the accident and ranks
+        # in the same class of the rule (never a weather change, more entities, or an early one)
+        scores = Scores(batch, candidates)
+        want = _klass(chosen, space)
 
         def holds(ms: list[Mutation]) -> list[bool]:
-            return [cons <= 0.0 and objs[1] <= f2_limit for objs, cons in scores.of(ms)]
+            return [cons <= 0.0 and _klass(Candidate(m, objs, cons, 0), space) <= want
+                    for m, (objs, cons) in zip(ms, scores.of(ms), strict=True)]
 
         small, _ = shrink_set(chosen.mutation, holds)
+        small, _ = shrink_magnitudes(small, space, holds, fixed=_onsets(small))
         evaluations += scores.simulated
         result["shrink_evaluations"] = scores.simulated
         result["search_chosen"] = cand_json(chosen)
@@ -84,6 +156,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
             chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
         entity = mutated_entities(space, chosen.mutation)
         result["chosen"] = cand_json(chosen)
+        result["shared_prefix_s"] = round(-chosen.objectives[3], 3)
         result["triggering_entity"] = {
             "entity": entity[0] if entity else None,
             "kind": entity_kinds(scn).get(entity[0]) if entity else None,
@@ -97,7 +170,20 @@ def phase_physical(run: Run) -> dict[str, Any]:
     return result
 
 
-#: f2 [m^2] within which front members count as equally similar to the original ...
+def _stats(generation: int, cands: Sequence[Candidate]) -> GenerationStats:
+    f = np.array([c.objectives for c in cands], dtype=float).reshape(len(cands), -1)
+    g = np.array([c.constraint for c in cands], dtype=float)
+    return GenerationStats(generation, len(cands), int((g <= 0).sum()),
+                           float(g.min()) if len(g) else float("inf"), f, g)
+
+
+def _onsets(m: Mutation) -> tuple[str, ...]:
+    """The onset times of a mutation's speed changes: kept as they are when it is shrunk
+    (moving an onset towards 0 would make the reference depart earlier)."""
+    return tuple(n for n in m.names if n.endswith(".speed_from_s"))
+
+
+#: f2 [m^2] within which references count as equally similar to the original ...
 F2_TOLERANCE_M2 = 1.0
 #: ... or this fraction of the best f2, whichever is larger: f2 is a mean squared distance,
 #: so its scale grows with speeds and duration, and a fixed margin that separates two
@@ -110,27 +196,52 @@ def f2_tolerance(best_f2: float) -> float:
     return best_f2 + max(F2_TOLERANCE_M2, F2_TOLERANCE_REL * best_f2)
 
 
-def _choose_trigger(res: SearchResult, space: MutationSpace) -> Candidate | None:
-    """The documented rule, over the feasible Pareto front:
+def _klass(c: Candidate, space: MutationSpace) -> tuple[int, int, int]:
+    """The coarse rank of a reference (smaller is better): a weather change last (fog or rain
+    changes every channel at once), then the number of mutated entities, then whether it
+    departs from the accident early (before EARLY_S; f4 = minus the shared prefix)."""
+    return (int(is_weather(c.mutation)), len(mutated_entities(space, c.mutation)),
+            int(-c.objectives[3] < EARLY_S) if len(c.objectives) > 3 else 0)
 
-    1. keep the executions most similar to the original (f2 within F2_TOLERANCE_M2 or
-       F2_TOLERANCE_REL of the best, whichever is larger; see f2_tolerance): a good
-       reference differs from the accident only where it must;
+
+def _ranked(feasible: Sequence[Candidate], space: MutationSpace) -> list[Candidate]:
+    """Accident-free candidates in the order of :func:`choose_reference`."""
+    if not feasible:
+        return []
+    classes = {id(c): _klass(c, space) for c in feasible}
+    out: list[Candidate] = []
+    for k in sorted(set(classes.values())):
+        group = [c for c in feasible if classes[id(c)] == k]
+        limit = f2_tolerance(min(c.objectives[1] for c in group))
+        out += sorted(group, key=lambda c: (c.objectives[1] > limit, c.objectives[0], c.objectives[2],
+                                            _removals(c.mutation), c.objectives[1], c.mutation.names,
+                                            _values(c.mutation)))
+    return out
+
+
+def _values(m: Mutation) -> tuple[str, ...]:
+    return tuple(str(m.values[n]) for n in m.names)
+
+
+def choose_reference(feasible: Sequence[Candidate], space: MutationSpace) -> Candidate | None:
+    """The documented rule over the accident-free candidates (None when there are none):
+
+    1. an entity change over a weather change (fog or rain changes every channel at once, so
+       the diff could not tell one module's departure from another's);
     2. then the fewest mutated entities (the triggering entity, not a coalition);
-    3. then the most suspicious (f1: close to and in front of the ego);
-    4. then the smallest change (f3);
-    5. then changing a property over removing an entity (``enabled`` -> off): a reference that
-       keeps every entity differs from the accident only in that property, which is what the
-       diff should see;
-    6. then the names, for determinism.
+    3. then a reference that stays identical to the accident for at least EARLY_S (f4): one that
+       departs from the first frame (a whole path shifted) makes every channel differ from the
+       start;
+    4. then the executions most similar to the original (f2 within F2_TOLERANCE_M2 or
+       F2_TOLERANCE_REL of the best, whichever is larger; see f2_tolerance);
+    5. then the most suspicious (f1: close to and in front of the ego);
+    6. then the smallest change (f3);
+    7. then changing a property over removing an entity (``enabled`` -> off);
+    8. then f2, the names and the values, so that the choice never depends on the order in
+       which candidates were found.
     """
-    if not res.front:
-        return None
-    best_f2 = min(c.objectives[1] for c in res.front)
-    similar = [c for c in res.front if c.objectives[1] <= f2_tolerance(best_f2)]
-    return min(similar, key=lambda c: (len(mutated_entities(space, c.mutation)), c.objectives[0],
-                                       c.objectives[2], _removals(c.mutation), c.objectives[1],
-                                       c.mutation.names))
+    ranked = _ranked(feasible, space)
+    return ranked[0] if ranked else None
 
 
 def _removals(m: Mutation) -> int:

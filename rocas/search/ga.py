@@ -144,10 +144,14 @@ def run_search(
     *,
     checkpoint: str | os.PathLike[str] | None = None,
     on_generation: Callable[[GenerationStats], None] | None = None,
+    screening_suffices: Callable[[list[Candidate]], bool] | None = None,
 ) -> SearchResult:
     """Run NSGA-II over ``space``; resumes from ``checkpoint`` when it exists.
 
-    Identical mutations are evaluated once (results are cached per search).
+    Identical mutations are evaluated once (results are cached per search). With
+    ``cfg.screen``, ``screening_suffices(candidates)`` may end the search after the screening:
+    what the screening found does not depend on the seed (its order does, its results do not),
+    so a caller that chooses among the screened candidates gets the same answer at every seed.
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.termination import get_termination
@@ -164,6 +168,8 @@ def run_search(
     sampling = _initial_population(space, cfg)
     if cfg.screen:
         sampling = _screen(space, evaluate, cfg, state, on_generation)
+        if screening_suffices is not None and screening_suffices(state.candidates):
+            return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
     algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True,
                       survival=StableRankAndCrowding())
     algorithm.setup(problem, termination=get_termination("n_gen", cfg.generations),
