@@ -13,8 +13,9 @@ ranks as well under the rule.
 The objectives of every simulated world (minimised): f1 suspiciousness of the mutated
 entities, f2 dissimilarity of the *other* actors' trajectories up to the accident (the
 paper's definition: the ego is not one of them), f3 size of the change, and f4 = minus the
-shared prefix [s]: how long the reference stays identical to the accident as the ego could
-see it (the ego's trajectory, and the actors while within :data:`VISIBLE_M` of it).
+shared prefix [s]: how long the ego drives in the reference exactly as in the accident. The
+constraint: no accident, and the ego gets as far as it had at the accident
+(:func:`reference_violation`).
 """
 
 from __future__ import annotations
@@ -50,31 +51,48 @@ from rocas.search.space import Mutation, MutationSpace
 
 #: the screening also tries each speed change from this long before the accident [s]
 ONSET_LEAD_S = 4.0
-#: an actor that moves differently farther than this from the ego does not count against the
-#: shared prefix [m] (the built-in perception's default range)
-VISIBLE_M = 80.0
-#: two positions closer than this are the same [m]
-SAME_POSITION_M = 1e-6
+#: a world counts as accident-free only when the ego also gets within this of as far as it
+#: had driven at the accident [m]: a light that stays red avoids the accident by keeping the
+#: ego from driving, which says nothing about the accident
+PROGRESS_TOLERANCE_M = 1.0
+#: two positions closer than this are the same [m]: a batch of simulations that mixes paths of
+#: other lengths moves an actor by up to ~1e-4 m (the simulator resamples every path of a batch
+#: to one point count), which is no departure
+SAME_POSITION_M = 0.01
 #: a reference that departs from the accident earlier than this [s] is an early one
 #: (:func:`choose_reference` prefers the others)
 EARLY_S = 1.0
 
 
 def shared_prefix_s(original: VariantResult, mutated: VariantResult, dt_s: float, upto: int) -> float:
-    """How long [s] ``mutated`` stays identical to ``original`` as the ego sees it, up to tick
-    ``upto``: until the ego's position departs, or an actor's while it is within VISIBLE_M of
-    the ego (an entity changed before the ego can see it leaves the executions the same)."""
+    """How long [s] the ego drives in ``mutated`` exactly as in ``original`` (to within
+    SAME_POSITION_M), up to tick ``upto``. A reference whose ego departs from the first frames
+    (a visible actor's whole path shifted, so the ego reacts at once) makes /control change at
+    the start and Algorithm 1 end there; one whose ego departs later (an entity changed before
+    the ego reacts to it, a speed changed from some time on) leaves the diff the accident's
+    own departure to find. Actors are not compared: an actor that moves differently from the
+    start while the ego waits (it cannot react yet) is a good reference."""
     n = min(upto, len(original.ego_xy), len(mutated.ego_xy))
-    ego = original.ego_xy[:n]
-    d_ego = np.hypot(*(mutated.ego_xy[:n] - ego).T)
-    departed = d_ego > SAME_POSITION_M
-    if original.actors_xy.shape[1]:
-        act = original.actors_xy[:n]
-        d_act = np.hypot(act[..., 0] - mutated.actors_xy[:n, :, 0], act[..., 1] - mutated.actors_xy[:n, :, 1])
-        near = np.hypot(act[..., 0] - ego[:, None, 0], act[..., 1] - ego[:, None, 1]) <= VISIBLE_M
-        departed |= ((d_act > SAME_POSITION_M) & near).any(axis=1)
+    departed = np.hypot(*(mutated.ego_xy[:n] - original.ego_xy[:n]).T) > SAME_POSITION_M
     first = int(np.argmax(departed)) if departed.any() else n
     return first * dt_s
+
+
+def path_length_m(xy: np.ndarray) -> float:
+    """Length [m] of a path of shape (T, 2)."""
+    return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
+
+
+def reference_violation(r: VariantResult, needed_m: float) -> float:
+    """The physical search's constraint (<= 0: a usable reference): the accident's
+    (:func:`~rocas.pipeline.evaluate.violation`), and for an accident-free world in which the
+    ego drives less than ``needed_m`` over the whole run, a value in (0.5, 1] graded by how
+    far short it stops (below any accident's, which is above 1)."""
+    v = violation(r.outcome)
+    if v > 0 or needed_m <= 0:
+        return v
+    travel = path_length_m(r.ego_xy)
+    return v if travel >= needed_m else 0.5 + 0.5 * (needed_m - travel) / needed_m
 
 
 def phase_physical(run: Run) -> dict[str, Any]:
@@ -94,6 +112,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
     heading = float(numerics.arctan2(ego_xy[1] - prev[1], ego_xy[0] - prev[0])) if tick else 0.0
     actor_ids = [a.id for a in scn.actors]
     upto = tick + 1
+    needed_m = path_length_m(orig.ego_xy[:upto]) - PROGRESS_TOLERANCE_M
 
     def objectives(m: Mutation, r: VariantResult) -> tuple[tuple[float, ...], float]:
         ents = mutated_entities(space, m)
@@ -101,7 +120,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
         f2 = scenario_dissimilarity({a: orig.actors_xy[:upto, i] for i, a in enumerate(actor_ids)},
                                     {a: r.actors_xy[:upto, i] for i, a in enumerate(actor_ids)})
         f4 = -shared_prefix_s(orig, r, scn.dt_s, upto)
-        return (f1, f2, space.distance(m), f4), violation(r.outcome)
+        return (f1, f2, space.distance(m), f4), reference_violation(r, needed_m)
 
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         tasks = [VariantTask(apply_physical(scn, m), (), scn.seed) for m in ms]

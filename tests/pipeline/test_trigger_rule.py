@@ -1,42 +1,68 @@
-"""The rule that picks the triggering entity from the physical search's Pareto front."""
+"""The rule that picks the reference (and so the triggering entity) among the accident-free
+worlds the physical search found: objectives (f1, f2, f3, f4 = minus the shared prefix [s])."""
+
+import random
+
+from rocas.pipeline.physical import physical_space
+from rocas.pipeline.physical_phase import F2_TOLERANCE_M2, choose_reference, f2_tolerance
+from rocas.scenarios.catalog import entry
+from rocas.search.ga import Candidate
+from rocas.search.space import Mutation
 
 
-def test_the_trigger_rule_prefers_changing_a_property_to_removing_the_entity():
-    from rocas.pipeline.physical import physical_space
-    from rocas.pipeline.physical_phase import _choose_trigger
-    from rocas.scenarios.catalog import entry
-    from rocas.search.ga import Candidate, SearchResult
-    from rocas.search.space import Mutation
+def _c(values, f1, f2, f3, prefix_s=5.0):
+    return Candidate(Mutation(values), (f1, f2, f3, -prefix_s), -1.0, 0)
 
+
+def test_the_rule_prefers_changing_a_property_to_removing_the_entity():
     space = physical_space(entry("A10").scenario)
-    off = Candidate(Mutation({"light.tl_skew.enabled": False}), (-1.6, 0.0, 2.0), -1.0, 0)
-    yellow = Candidate(Mutation({"light.tl_skew.policy": "fixed_yellow"}), (-1.6, 0.0, 2.0), -1.0, 0)
-    res = SearchResult(candidates=[off, yellow], front=[off, yellow])
-    assert _choose_trigger(res, space) is yellow
+    off = _c({"light.tl_skew.enabled": False}, -1.6, 0.0, 2.0)
+    yellow = _c({"light.tl_skew.policy": "fixed_yellow"}, -1.6, 0.0, 2.0)
+    assert choose_reference([off, yellow], space) is yellow
     # the earlier keys still come first: a smaller change wins even if it removes the entity
-    smaller = Candidate(off.mutation, (-1.6, 0.0, 1.5), -1.0, 0)
-    res = SearchResult(candidates=[smaller, yellow], front=[smaller, yellow])
-    assert _choose_trigger(res, space) is smaller
+    smaller = _c(off.mutation.values, -1.6, 0.0, 1.5)
+    assert choose_reference([smaller, yellow], space) is smaller
 
 
 def test_the_similarity_margin_scales_with_f2():
-    """f2 is a mean squared distance: on A3 the fog (f2 21.0 m^2) and the truck's speed
-    (25.8 m^2) are equally similar references at that scale, and the truck, close and in front
-    of the ego, is the more suspicious; at small f2 the margin stays 1 m^2."""
-    from rocas.pipeline.physical import physical_space
-    from rocas.pipeline.physical_phase import F2_TOLERANCE_M2, _choose_trigger, f2_tolerance
-    from rocas.scenarios.catalog import entry
-    from rocas.search.ga import Candidate, SearchResult
-    from rocas.search.space import Mutation
-
     assert f2_tolerance(0.0) == F2_TOLERANCE_M2
     assert f2_tolerance(2.0) == 3.0
     assert f2_tolerance(21.0) > 25.8 > 21.0 + F2_TOLERANCE_M2
-
     space = physical_space(entry("A3").scenario)
-    truck = next(v.name for v in space.variables if v.name.endswith(".speed_scale"))
-    fog = Candidate(Mutation({"weather.fog_density": 39.1}), (-0.2, 21.0, 1.39), -1.0, 0)
-    faster = Candidate(Mutation({truck: 1.07}), (-2.14, 25.8, 1.05), -1.0, 0)
-    far = Candidate(Mutation({truck: 1.4}), (-2.14, 40.0, 1.4), -1.0, 0)
-    assert _choose_trigger(SearchResult(candidates=[fog, faster], front=[fog, faster]), space) is faster
-    assert _choose_trigger(SearchResult(candidates=[fog, far], front=[fog, far]), space) is fog
+    speed = "actor.truck.speed_delta_mps"
+    faster = _c({speed: 1.0}, -2.14, 25.8, 1.05)
+    far = _c({speed: 4.0}, -2.14, 40.0, 1.4)
+    closer = _c({"actor.truck.start_s_m": 140.0}, -2.14, 21.0, 1.2)
+    assert choose_reference([closer, faster], space) is faster  # as similar, and a smaller change
+    assert choose_reference([closer, far], space) is closer
+
+
+def test_a_weather_change_never_wins_over_an_entity_change():
+    """Fog changes every channel at once; even a less suspicious, less similar, larger entity
+    change that avoids the accident is the better reference."""
+    space = physical_space(entry("A3").scenario)
+    fog = _c({"weather.fog_density": 39.1}, -0.2, 0.0, 1.39)
+    truck = _c({"actor.truck.speed_delta_mps": 3.0}, -0.1, 80.0, 1.9)
+    assert choose_reference([fog, truck], space) is truck
+    assert choose_reference([fog], space) is fog
+
+
+def test_a_reference_that_departs_from_the_first_frame_loses_to_one_that_departs_later():
+    """A whole path shifted 1-2 m changes every channel from t = 0; a speed change from 4 s
+    before the accident keeps the executions identical until then."""
+    space = physical_space(entry("A3").scenario)
+    shifted = _c({"actor.truck.lateral_offset_m": 1.5}, -2.5, 0.5, 1.1, prefix_s=0.0)
+    late = _c({"actor.truck.speed_delta_mps": -3.0, "actor.truck.speed_from_s": 2.0},
+              -2.1, 9.0, 2.4, prefix_s=2.0)
+    assert choose_reference([shifted, late], space) is late
+
+
+def test_the_choice_does_not_depend_on_the_order_candidates_were_found_in():
+    space = physical_space(entry("A3").scenario)
+    cands = [_c({"actor.truck.color": c}, -2.0, 0.0, 2.0) for c in ("blue", "red", "white", "black")]
+    cands += [_c({"actor.truck.model": m}, -2.0, 0.0, 2.0) for m in ("bus", "sedan")]
+    first = choose_reference(cands, space)
+    for k in range(5):
+        random.Random(k).shuffle(cands)
+        assert choose_reference(cands, space) is first
+    assert choose_reference([], space) is None

@@ -148,6 +148,33 @@ def test_shrink_magnitudes_moves_towards_the_boundary():
     assert 7.9 <= small.values["truck.speed"] <= 8.0
 
 
+def test_shrink_magnitudes_keeps_the_fixed_variables():
+    def holds(ms):
+        return [search_toy.avoided(m) for m in ms]
+
+    start = Mutation({"truck.speed": 2.0, "car.x": 10.0})
+    small, _ = shrink_magnitudes(start, SPACE, holds, rounds=3, fixed=("car.x",))
+    assert small.values["car.x"] == 10.0 and 7.9 <= small.values["truck.speed"] <= 8.0
+
+
+def test_a_screening_that_suffices_ends_the_search_with_the_same_result_at_every_seed():
+    """Two ends of each range screened, then no generation: what the screening found does not
+    depend on the seed; without the predicate the genetic search goes on and does."""
+    def run(seed, suffices):
+        cfg = SearchConfig(population=8, generations=3, seed=seed, screen=True)
+        return run_search(SPACE, search_toy.batch, cfg, n_objectives=2,
+                          screening_suffices=suffices)
+
+    def any_fix(cands):
+        return any(c.feasible for c in cands)
+
+    runs = [run(seed, any_fix) for seed in (0, 1, 2)]
+    assert all(c.generation == 0 for r in runs for c in r.candidates)
+    assert len({frozenset((c.mutation, c.objectives) for c in r.candidates) for r in runs}) == 1
+    assert runs[0].feasible
+    assert max(c.generation for c in run(0, lambda cands: False).candidates) > 0
+
+
 def test_executor_registry():
     assert make_executor("serial").name == "serial"
     with pytest.raises(UsageError, match="unknown executor"):

@@ -1,0 +1,102 @@
+"""The physical mutation space: speed changes that lift slow actors and start late, the
+screening's single-property mutants, and the shared prefix of two executions."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rocas.pipeline.evaluate import VariantResult
+from rocas.pipeline.physical import (
+    SCREEN_FRACTIONS,
+    SPEED_LIFT_MPS,
+    SPEED_RAMP_S,
+    apply_physical,
+    physical_space,
+    screening_mutants,
+    shifted_profile,
+)
+from rocas.pipeline.physical_phase import shared_prefix_s
+from rocas.scenarios.catalog import entry
+from rocas.search.space import Mutation
+
+
+def test_the_speed_change_lifts_a_creeping_actor_above_walking_pace():
+    """A car creeping at 0.3 m/s can be lifted to SPEED_LIFT_MPS more (a scaling of its
+    profile by at most 1.5 could only reach 0.45 m/s), or stopped."""
+    scn = entry("A1").scenario
+    creeper = scn.actors[0]
+    var = physical_space(scn).variable(f"actor.{creeper.id}.speed_delta_mps")
+    assert var.high >= SPEED_LIFT_MPS and var.low == -max(v for _, v in creeper.speed_profile)
+    lifted = apply_physical(scn, Mutation({var.name: var.high})).actors[0]
+    assert lifted.speed_profile[0][1] >= 0.3 + SPEED_LIFT_MPS
+    stopped = apply_physical(scn, Mutation({var.name: var.low})).actors[0]
+    assert all(v == 0.0 for _, v in stopped.speed_profile)
+
+
+def test_a_late_speed_change_keeps_the_profile_until_it_starts():
+    profile = ((0.0, 8.0), (2.0, 6.0), (10.0, 6.0))
+    assert shifted_profile(profile, 2.0, 0.0) == ((0.0, 10.0), (2.0, 8.0), (10.0, 8.0))
+    late = shifted_profile(profile, -3.0, 4.0)
+    assert late[:2] == ((0.0, 8.0), (2.0, 6.0))
+    assert late[2] == (4.0, 6.0)  # the original speed when the change starts ...
+    assert late[3] == (4.0 + SPEED_RAMP_S, 3.0)  # ... reached over the ramp
+    assert late[-1] == (10.0, 3.0)
+    assert shifted_profile(profile, -20.0, 0.0) == ((0.0, 0.0), (2.0, 0.0), (10.0, 0.0))
+
+
+def test_the_screening_tries_every_property_alone():
+    scn = entry("A3").scenario
+    space = physical_space(scn)
+    mutants = screening_mutants(space, (0.0, 6.0))
+    assert len(set(mutants)) == len(mutants)
+    for var in space.variables:
+        mine = [m for m in mutants if var.name in m.values]
+        if var.name.endswith(".speed_from_s"):  # only with a speed change: alone it is no change
+            assert mine and all(len(m.values) == 2 and m.values[var.name] == 6.0 for m in mine)
+        elif var.name.endswith(".speed_delta_mps"):
+            assert len(mine) == 2 * len(SCREEN_FRACTIONS)
+        elif var.kind == "enum":
+            assert sorted(map(str, (m.values[var.name] for m in mine))) == \
+                sorted(str(c) for c in var.choices if c != var.original)
+        elif var.kind == "bool":
+            assert [m.values[var.name] for m in mine] == [not var.original]
+        else:
+            assert len(mine) == sum(var.change(var.decode(f)) > 0 for f in SCREEN_FRACTIONS)
+            assert all(len(m.values) == 1 for m in mine)
+
+
+def _result(ego, actors):
+    return VariantResult(None, np.asarray(ego, float), np.asarray(actors, float))  # outcome unread
+
+
+def test_the_shared_prefix_ends_where_the_ego_departs():
+    t = np.arange(10.0)
+    ego = np.stack([t, 0 * t], axis=1)
+    actors = np.stack([t + 10, 0 * t], axis=1)[:, None]
+    original = _result(ego, actors)
+    assert shared_prefix_s(original, original, 0.1, 10) == pytest.approx(1.0)
+    moved = actors.copy()
+    moved[1:, 0, 1] += 2.0  # an actor that moves otherwise while the ego drives on as before
+    assert shared_prefix_s(original, _result(ego, moved), 0.1, 10) == pytest.approx(1.0)
+    ego_moved = ego.copy()
+    ego_moved[6:, 1] += 0.05
+    assert shared_prefix_s(original, _result(ego_moved, actors), 0.1, 10) == pytest.approx(0.6)
+    ego_moved[4:6, 1] += 1e-4  # below SAME_POSITION_M: the same position
+    assert shared_prefix_s(original, _result(ego_moved, actors), 0.1, 10) == pytest.approx(0.6)
+
+
+def test_a_world_where_the_ego_stops_short_of_the_accident_is_no_reference():
+    from rocas.pipeline.physical_phase import reference_violation
+    from rocas.sim.oracles import Outcome
+
+    fields = {f.name: None for f in dataclasses.fields(Outcome)}
+    calm = Outcome(**(fields | {"collided": False, "emergency": False, "min_separation_m": 3.0}))
+    crash = Outcome(**(fields | {"collided": True, "emergency": False, "min_separation_m": -0.2}))
+    t = np.linspace(0.0, 20.0, 21)
+    drives = np.stack([t, 0 * t], axis=1)
+    waits = np.zeros((21, 2))
+    assert reference_violation(VariantResult(calm, drives, np.zeros((21, 0, 2))), 10.0) <= 0
+    stalled = reference_violation(VariantResult(calm, waits, np.zeros((21, 0, 2))), 10.0)
+    assert 0.5 < stalled <= 1.0
+    assert reference_violation(VariantResult(crash, drives, np.zeros((21, 0, 2))), 10.0) > 1.0
