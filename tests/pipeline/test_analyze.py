@@ -144,8 +144,9 @@ def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):
 
 def test_resume_inside_the_cyber_search_gives_the_same_report(red_truck, tmp_path):
     # a search resumed from its checkpoint, then the shrink and the choice among shrunk fixes
-    # (which uses the gaps to other road users the simulations measured) as without the stop
-    cfg = AnalyzeConfig(seed=1, budget=96, population=8, validation_variants=4)
+    # (which uses the gaps to other road users the simulations measured) as without the stop;
+    # without screening, since a screening that finds a fix ends the search before generation 1
+    cfg = AnalyzeConfig(seed=1, budget=96, population=8, validation_variants=4, screening=False)
     whole = analyze(red_truck, tmp_path / "whole", cfg)
     out = tmp_path / "run"
 
@@ -299,9 +300,22 @@ def test_the_budget_rule_and_the_planned_simulations():
     assert planned_simulations(replace(small, screening=False).search(2, 36)) == 48
 
 
-def test_the_cyber_search_adds_new_mutants_after_a_screening_larger_than_the_budget(serial_run):
-    out, _ = serial_run
+def test_a_screening_that_finds_a_fix_ends_the_cyber_search(serial_run):
+    """The fix is then chosen among what every seed screens alike (a screening without a fix
+    is followed by generations: tests/search/test_ga.py)."""
+    out, report = serial_run
     cyber = json.loads((out / "cyber.json").read_text())
-    assert 2 * cyber["parameters"] > CFG.budget
-    screened = cyber["generations"][0]["evaluations"]
-    assert cyber["generations"][-1]["evaluations"] > screened
+    assert report["verdict"] == "misconfiguration" and cyber["first_fix_evaluation"] is not None
+    assert [g["generation"] for g in cyber["generations"]] == [0]
+    physical = json.loads((out / "physical.json").read_text())
+    assert physical["search"] == "screening" and physical["screening_feasible"] > 0
+
+
+@pytest.mark.slow  # a second whole analysis (about 30 s)
+def test_another_seed_gives_the_same_report_when_the_screenings_decide(red_truck, serial_run, tmp_path):
+    out, report = serial_run
+    other = analyze(red_truck, tmp_path / "run", replace(CFG, seed=CFG.seed + 1),
+                    executor=SerialExecutor())
+    same = ("verdict", "triggering_entity", "deviating_module", "path", "misconfiguration",
+            "alternatives", "evaluations")
+    assert {k: other[k] for k in same} == {k: report[k] for k in same}

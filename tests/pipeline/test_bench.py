@@ -59,3 +59,33 @@ def test_bench_instances_are_variants_the_documented_fix_repairs(tmp_path):
     render(res, Env(stdout=out, stderr=io.StringIO()))
     assert (f"A9: {inst['crashed']} of {inst['tried']} variants crash, the documented fix repairs "
             f"{inst['fix_holds']}; {inst['hits']} of 1 analysed correctly") in out.getvalue()
+
+
+def test_bench_over_seeds_tables_the_hits_per_entry_and_seed(tmp_path, monkeypatch):
+    """Each seed's bench runs in its own directory with that seed; the table joins them."""
+    import rocas.pipeline.bench as bench
+    from rocas.errors import UsageError
+
+    seen = []
+
+    def fake(ids, out, cfg, **kwargs):
+        seen.append((out, cfg.seed))
+        hit_a2 = cfg.seed != 3
+
+        def row(i, hit, module):
+            return {"id": i, "type": i.upper(), "hit": hit, "seconds": 10.0 + cfg.seed,
+                    "found": {"deviating_module": module, "parameters": [], "trigger_entity": None}}
+        return {"entries": [row("a01", True, "prediction"), row("a02", hit_a2, "planning")],
+                "hits": 1 + hit_a2, "total": 2}
+
+    monkeypatch.setattr(bench, "run_bench", fake)
+    res = bench.run_bench_seeds(None, tmp_path, AnalyzeConfig(), [0, 3, 4])
+    assert seen == [(tmp_path / "seed-0", 0), (tmp_path / "seed-3", 3), (tmp_path / "seed-4", 4)]
+    assert res["hits_per_seed"] == {"0": 2, "3": 1, "4": 2}
+    assert res["every_seed"] == 1
+    a02 = next(r for r in res["entries"] if r["id"] == "a02")
+    assert a02["hits"] == {"0": True, "3": False, "4": True}
+    assert a02["found"]["3"]["module"] == "planning"
+    assert res["median_seconds"] == 13.0
+    with pytest.raises(UsageError, match="repeats"):
+        bench.run_bench_seeds(None, tmp_path, AnalyzeConfig(), [1, 1])
