@@ -13,11 +13,15 @@ The mutation space of the paper's Table 1 over a scenario's entities:
 
 Actors follow their routes, so their rotation is the route's tangent and is not a free
 property; a vehicle's "location" is its start position along the route and its lateral
-offset. Its "speed" is two properties: ``speed_delta_mps`` adds to every speed of its profile
-(negative values slow it, to a stop at most; positive ones lift it, so an actor that creeps at
-0.3 m/s can drive at walking pace or faster, which no scaling of its profile could do), from
-the time ``speed_from_s`` on (0: from the start), reached over :data:`SPEED_RAMP_S`. A change
-from a later time leaves the executions identical until then, which is what the diff needs.
+offset. Its "speed" is ``speed_delta_mps``, added to every speed of its profile (negative
+values slow it, to a stop at most; positive ones lift it, so an actor that creeps at 0.3 m/s can
+drive at walking pace or faster, which no scaling of its profile could do).
+
+The change holds from the start. A speed change from a later time was tried (2026-11-25) and
+left out: an actor the ego can see that moves otherwise from some time on makes
+/perception/obstacles the first channel to change, so Algorithm 1 names perception whatever
+module decided the accident (A4 did so); changed from the start, the actor's difference is the
+channels' baseline and the first change point is the ADS's decision.
 """
 
 from __future__ import annotations
@@ -35,8 +39,6 @@ LIGHT_POLICIES = ("original", "fixed_green", "fixed_red", "fixed_yellow", "off")
 ALONG_M, ACROSS_M, OBJECT_SHIFT_M = 15.0, 2.0, 3.0
 #: how far a speed may be lifted at least [m/s] (or half the actor's top speed, if more)
 SPEED_LIFT_MPS = 3.0
-#: a speed change from speed_from_s > 0 is reached linearly over this time [s]
-SPEED_RAMP_S = 1.0
 #: the values of a real property the screening tries, as fractions of its range
 SCREEN_FRACTIONS = (0.0, 0.25, 0.75, 1.0)
 
@@ -57,8 +59,6 @@ def physical_space(scenario: Scenario) -> MutationSpace:
         top = max(s for _, s in a.speed_profile)
         v.append(Variable(f"{p}.speed_delta_mps", a.id, "real", 0.0, low=-top,
                           high=max(SPEED_LIFT_MPS, 0.5 * top), unit="m/s"))
-        v.append(Variable(f"{p}.speed_from_s", a.id, "real", 0.0, low=0.0,
-                          high=scenario.duration_s, unit="s"))
     for o in scenario.objects:
         p = f"object.{o.id}"
         x, y = o.position
@@ -102,9 +102,8 @@ def apply_physical(scenario: Scenario, mutation: Mutation) -> Scenario:
         ch = by_entity.get(("actor", a.id), {})
         if ch:
             delta = float(ch.pop("speed_delta_mps", 0.0))
-            start = float(ch.pop("speed_from_s", 0.0))
             if delta:
-                ch["speed_profile"] = shifted_profile(a.speed_profile, delta, start)
+                ch["speed_profile"] = shifted_profile(a.speed_profile, delta)
             a = dataclasses.replace(a, **ch)
         actors.append(a)
     objects = []
@@ -135,60 +134,26 @@ def apply_physical(scenario: Scenario, mutation: Mutation) -> Scenario:
                                areas=tuple(areas), traffic_lights=tuple(lights), weather=weather)
 
 
-def _speed_at(profile: tuple[tuple[float, float], ...], t: float) -> float:
-    """The profile's speed at time ``t`` [m/s] (linear between knots, held outside them)."""
-    if t <= profile[0][0]:
-        return profile[0][1]
-    for (t0, v0), (t1, v1) in zip(profile, profile[1:], strict=False):
-        if t <= t1:
-            return v0 + (v1 - v0) * (t - t0) / (t1 - t0) if t1 > t0 else v1
-    return profile[-1][1]
-
-
-def shifted_profile(profile: tuple[tuple[float, float], ...], delta_mps: float, start_s: float
+def shifted_profile(profile: tuple[tuple[float, float], ...], delta_mps: float
                     ) -> tuple[tuple[float, float], ...]:
-    """``profile`` with ``delta_mps`` added to every speed (never below 0) from ``start_s`` on,
-    reached linearly over SPEED_RAMP_S; unchanged before ``start_s`` (from the start when
-    ``start_s`` is 0)."""
-    def lifted(v: float) -> float:
-        return max(0.0, v + delta_mps)
-
-    if start_s <= 0.0:
-        return tuple((t, lifted(v)) for t, v in profile)
-    end = start_s + SPEED_RAMP_S
-    knots = [(t, v) for t, v in profile if t < start_s]
-    knots.append((start_s, _speed_at(profile, start_s)))
-    knots.append((end, lifted(_speed_at(profile, end))))
-    knots += [(t, lifted(v)) for t, v in profile if t > end]
-    return tuple(knots)
+    """``profile`` with ``delta_mps`` added to every speed (never below 0)."""
+    return tuple((t, max(0.0, v + delta_mps)) for t, v in profile)
 
 
-def screening_mutants(space: MutationSpace, onsets_s: tuple[float, ...] = (0.0,)) -> list[Mutation]:
+def screening_mutants(space: MutationSpace) -> list[Mutation]:
     """Every single-property mutant the physical screening simulates, in space order: each
-    other enum choice, the flipped bool, each real at SCREEN_FRACTIONS of its range; a speed
-    change at each of those values once from each time in ``onsets_s`` (its onset is not a
-    property of its own here: alone it changes nothing). Values equal to the original are
-    left out."""
+    other enum choice, the flipped bool, each real at SCREEN_FRACTIONS of its range (values
+    equal to the original are left out)."""
     out: list[Mutation] = []
     for var in space.variables:
-        if var.name.endswith(".speed_from_s"):
-            continue
         if var.kind == "enum":
             values: list[Value] = [c for c in var.choices if c != var.original]
         elif var.kind == "bool":
             values = [not var.original]
         else:
-            values = [var.decode(f) for f in SCREEN_FRACTIONS]
-            if var.kind == "int":
-                values = list(dict.fromkeys(values))
+            values = list(dict.fromkeys(var.decode(f) for f in SCREEN_FRACTIONS))
             values = [x for x in values if var.change(x) > 0]
-        for x in values:
-            if var.name.endswith(".speed_delta_mps"):
-                onset = var.name[: -len("speed_delta_mps")] + "speed_from_s"
-                for t in dict.fromkeys(onsets_s):
-                    out.append(Mutation({var.name: x, onset: float(t)} if t > 0 else {var.name: x}))
-            else:
-                out.append(Mutation({var.name: x}))
+        out += [Mutation({var.name: x}) for x in values]
     return out
 
 

@@ -2,8 +2,7 @@
 
 The search is made to give the same answer at every seed. It starts with a screening: every
 single-property mutant of the world (:func:`~rocas.pipeline.physical.screening_mutants`: each
-enum choice, the flipped bool, reals at four points of their range, speed changes from the
-start and from :data:`ONSET_LEAD_S` before the accident) is simulated once. When one of them
+enum choice, the flipped bool, reals at four points of their range) is simulated once. When one of them
 avoids the accident, the reference is chosen among them by a fixed rule
 (:func:`choose_reference`) and the genetic search does not run: the answer does not depend on
 the seed. Only when none does, the genetic search (seeded) looks for combinations. The chosen
@@ -49,8 +48,6 @@ from rocas.search.minimize import shrink_magnitudes, shrink_set
 from rocas.search.objectives import scenario_dissimilarity, suspiciousness
 from rocas.search.space import Mutation, MutationSpace
 
-#: the screening also tries each speed change from this long before the accident [s]
-ONSET_LEAD_S = 4.0
 #: a world counts as accident-free only when the ego also gets within this of as far as it
 #: had driven at the accident [m]: a light that stays red avoids the accident by keeping the
 #: ego from driving, which says nothing about the accident
@@ -59,9 +56,10 @@ PROGRESS_TOLERANCE_M = 1.0
 #: other lengths moves an actor by up to ~1e-4 m (the simulator resamples every path of a batch
 #: to one point count), which is no departure
 SAME_POSITION_M = 0.01
-#: a reference that departs from the accident earlier than this [s] is an early one
-#: (:func:`choose_reference` prefers the others)
-EARLY_S = 1.0
+#: a reference whose ego departs from the accident's earlier than this [s] is an early one
+#: (:func:`choose_reference` prefers the others): its planning and control differ from their
+#: first messages, so they have no change point and Algorithm 1 ends at /control
+EARLY_S = 0.5
 
 
 def shared_prefix_s(original: VariantResult, mutated: VariantResult, dt_s: float, upto: int) -> float:
@@ -104,7 +102,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
     scn, orig, tick = run.scenario, run.original, run.accident_tick
     assert scn is not None and orig is not None and run.accident is not None
     space = physical_space(scn)
-    screening = screening_mutants(space, (0.0, max(0.0, run.accident.time_s - ONSET_LEAD_S)))
+    screening = screening_mutants(space)
     run.progress("physical", {"planned": len(screening)})
     positions = entity_positions(scn, orig.actors_xy[min(tick, len(orig.actors_xy) - 1)])
     ego_xy = tuple(orig.ego_xy[tick])
@@ -166,7 +164,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
                     for m, (objs, cons) in zip(ms, scores.of(ms), strict=True)]
 
         small, _ = shrink_set(chosen.mutation, holds)
-        small, _ = shrink_magnitudes(small, space, holds, fixed=_onsets(small))
+        small, _ = shrink_magnitudes(small, space, holds)
         evaluations += scores.simulated
         result["shrink_evaluations"] = scores.simulated
         result["search_chosen"] = cand_json(chosen)
@@ -194,12 +192,6 @@ def _stats(generation: int, cands: Sequence[Candidate]) -> GenerationStats:
     g = np.array([c.constraint for c in cands], dtype=float)
     return GenerationStats(generation, len(cands), int((g <= 0).sum()),
                            float(g.min()) if len(g) else float("inf"), f, g)
-
-
-def _onsets(m: Mutation) -> tuple[str, ...]:
-    """The onset times of a mutation's speed changes: kept as they are when it is shrunk
-    (moving an onset towards 0 would make the reference depart earlier)."""
-    return tuple(n for n in m.names if n.endswith(".speed_from_s"))
 
 
 #: f2 [m^2] within which references count as equally similar to the original ...
@@ -248,9 +240,9 @@ def choose_reference(feasible: Sequence[Candidate], space: MutationSpace) -> Can
     1. an entity change over a weather change (fog or rain changes every channel at once, so
        the diff could not tell one module's departure from another's);
     2. then the fewest mutated entities (the triggering entity, not a coalition);
-    3. then a reference that stays identical to the accident for at least EARLY_S (f4): one that
-       departs from the first frame (a whole path shifted) makes every channel differ from the
-       start;
+    3. then a reference whose ego drives as in the accident for at least EARLY_S (f4): one whose
+       ego departs from the first frames (a visible actor's whole path shifted, and the ego
+       reacts at once) makes planning and control differ from their first messages;
     4. then the executions most similar to the original (f2 within F2_TOLERANCE_M2 or
        F2_TOLERANCE_REL of the best, whichever is larger; see f2_tolerance);
     5. then the most suspicious (f1: close to and in front of the ego);

@@ -11,7 +11,7 @@ how a batch is run.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Sequence
 
 from rocas.search.space import Mutation, MutationSpace, Value
 
@@ -64,10 +64,9 @@ def _grid(lo: float, hi: float, points: int, integer: bool) -> list[Value]:
 
 def shrink_all_magnitudes(
     mutations: Sequence[Mutation], space: MutationSpace, holds: IndexedPredicate,
-    points: int = 7, rounds: int = 2, fixed: Collection[str] = (),
+    points: int = 7, rounds: int = 2,
 ) -> tuple[list[Mutation], int]:
-    """Move each real or integer change of each fix towards its original value while it holds
-    (the variables named in ``fixed`` keep their values).
+    """Move each real or integer change of each fix towards its original value while it holds.
 
     Per variable the interval between the original value (which fails, or the variable would
     have been dropped) and the current value is searched on ``points`` evenly spaced values
@@ -85,7 +84,7 @@ def shrink_all_magnitudes(
     for i, m in enumerate(current):
         for n in m.names:
             var = space.variable(n)
-            if var.kind in ("real", "int") and n not in fixed:
+            if var.kind in ("real", "int"):
                 lo[(i, n)] = float(var.original)  # type: ignore[arg-type]
     evaluations = 0
     for _ in range(rounds):
@@ -123,9 +122,8 @@ def shrink_set(mutation: Mutation, holds: BatchPredicate) -> tuple[Mutation, int
 
 
 def shrink_magnitudes(mutation: Mutation, space: MutationSpace, holds: BatchPredicate,
-                      points: int = 7, rounds: int = 2, fixed: Collection[str] = ()
-                      ) -> tuple[Mutation, int]:
+                      points: int = 7, rounds: int = 2) -> tuple[Mutation, int]:
     """:func:`shrink_all_magnitudes` for one fix."""
     out, n = shrink_all_magnitudes([mutation], space,
-                                   lambda trials: holds([m for _, m in trials]), points, rounds, fixed)
+                                   lambda trials: holds([m for _, m in trials]), points, rounds)
     return out[0], n

@@ -48,12 +48,11 @@ def test_a_weather_change_never_wins_over_an_entity_change():
 
 
 def test_a_reference_that_departs_from_the_first_frame_loses_to_one_that_departs_later():
-    """A whole path shifted 1-2 m changes every channel from t = 0; a speed change from 4 s
-    before the accident keeps the executions identical until then."""
+    """A whole path shifted 1-2 m makes the ego react from the first frames, so planning and
+    control differ from their first messages; a slower truck leaves the ego as it was for 2 s."""
     space = physical_space(entry("A3").scenario)
-    shifted = _c({"actor.truck.lateral_offset_m": 1.5}, -2.5, 0.5, 1.1, prefix_s=0.0)
-    late = _c({"actor.truck.speed_delta_mps": -3.0, "actor.truck.speed_from_s": 2.0},
-              -2.1, 9.0, 2.4, prefix_s=2.0)
+    shifted = _c({"actor.truck.lateral_offset_m": 1.5}, -2.5, 0.5, 1.1, prefix_s=0.1)
+    late = _c({"actor.truck.speed_delta_mps": -3.0}, -2.1, 9.0, 2.4, prefix_s=2.0)
     assert choose_reference([shifted, late], space) is late
 
 

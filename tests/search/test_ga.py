@@ -148,15 +148,6 @@ def test_shrink_magnitudes_moves_towards_the_boundary():
     assert 7.9 <= small.values["truck.speed"] <= 8.0
 
 
-def test_shrink_magnitudes_keeps_the_fixed_variables():
-    def holds(ms):
-        return [search_toy.avoided(m) for m in ms]
-
-    start = Mutation({"truck.speed": 2.0, "car.x": 10.0})
-    small, _ = shrink_magnitudes(start, SPACE, holds, rounds=3, fixed=("car.x",))
-    assert small.values["car.x"] == 10.0 and 7.9 <= small.values["truck.speed"] <= 8.0
-
-
 def test_a_screening_that_suffices_ends_the_search_with_the_same_result_at_every_seed():
     """Two ends of each range screened, then no generation: what the screening found does not
     depend on the seed; without the predicate the genetic search goes on and does."""
