@@ -66,7 +66,12 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
-    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals)
+    # a screened fix sits at an end of its parameter's range, so its size says little about how
+    # small a fix that parameter (and direction) gives: when the screening decided, more of
+    # them are shrunk before the smallest is chosen
+    screened_only = search.screen and all(c.generation == 0 for c in res.candidates)
+    count = max(run.cfg.shrink_candidates, SCREENED_SHRINK) if screened_only else run.cfg.shrink_candidates
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, count, originals)
     nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
     if nearest is not None:
         result["nearest_fix"] = cand_json(nearest)
@@ -122,6 +127,10 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     (run.out / "cyber.ckpt").unlink(missing_ok=True)
     return result
 
+
+#: how many screened fixes (distinct parameters and directions, smallest ends first) are shrunk
+#: when the screening ended the cyber search
+SCREENED_SHRINK = 12
 
 #: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter
 #: moved 5 % of its range farther than the chosen fix)
