@@ -66,12 +66,13 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
-    # a screened fix sits at an end of its parameter's range, so its size says little about how
-    # small a fix that parameter (and direction) gives: when the screening decided, more of
-    # them are shrunk before the smallest is chosen
-    screened_only = search.screen and all(c.generation == 0 for c in res.candidates)
-    count = max(run.cfg.shrink_candidates, SCREENED_SHRINK) if screened_only else run.cfg.shrink_candidates
-    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, count, originals)
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals)
+    if search.screen and all(c.generation == 0 for c in res.candidates):
+        # the screening decided: a screened fix sits at an end of its parameter's range, so its
+        # size says nothing about which way that parameter gives the smaller fix; the other
+        # direction of each candidate's parameter is shrunk too (raising a margin, not only
+        # lowering it until the ego races ahead)
+        candidates += _other_directions(res, candidates, run.cfg.h1_limit_m2, originals)
     nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
     if nearest is not None:
         result["nearest_fix"] = cand_json(nearest)
@@ -127,10 +128,6 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     (run.out / "cyber.ckpt").unlink(missing_ok=True)
     return result
 
-
-#: how many screened fixes (distinct parameters and directions, smallest ends first) are shrunk
-#: when the screening ended the cyber search
-SCREENED_SHRINK = 12
 
 #: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter
 #: moved 5 % of its range farther than the chosen fix)
@@ -213,6 +210,26 @@ def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
             out.append(c)
         if len(out) == count:
             break
+    return out
+
+
+def _other_directions(res: SearchResult, chosen: list[Candidate], h1_limit: float,
+                      originals: Mapping[str, float]) -> list[Candidate]:
+    """For each single-parameter fix in ``chosen``, the smallest fix (h1 within the limit) that
+    moves the same parameter the other way, when the search found one."""
+    taken = {_direction(c.mutation, originals) for c in chosen}
+    out = []
+    for c in chosen:
+        if len(c.mutation.values) != 1:
+            continue
+        ((name, sign),) = _direction(c.mutation, originals)
+        other = ((name, -sign),)
+        found = sorted((f for f in res.feasible if f.objectives[0] <= h1_limit
+                        and _direction(f.mutation, originals) == other),
+                       key=lambda f: (f.objectives[1], f.objectives[0]))
+        if found and other not in taken:
+            taken.add(other)
+            out.append(found[0])
     return out
 
 
