@@ -34,8 +34,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rocas.pipeline.analyze import AnalyzeConfig, analyze
+from rocas.pipeline.analyze import analyze
 from rocas.pipeline.bench import _expected, _found, score
+from rocas.pipeline.config import AnalyzeConfig
 from rocas.scenarios.catalog import accident_matches
 from rocas.scenarios.variants import load_variant
 from rocas.sim.engine import simulate
