@@ -6,6 +6,10 @@
 - ``generate --instances K [-o DIR] [--seed S]``: K seeded variants per type that still
   crash and that a documented fix still repairs; reports per type how many were tried, crash
   and are repaired, and writes the kept variants as scenario TOML.
+- ``generate --family F [--family G ...] --instances K [-o DIR] [--record]``: K variants per
+  type and family (rotated, mirrored, other speeds, actors, starts, or all mixed; see
+  rocas.scenarios.variants), checked the same way, written as catalog-format files with their
+  ground truth (and, with ``--record``, their accident recordings beside them).
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from pathlib import Path
 from rocas._fs import check_parent_exists
 from rocas.cli.console import Env
 from rocas.errors import UsageError
+from rocas.scenarios.families import FAMILIES
 
 HELP = "the accident catalog (A1-A12): list it, record its accidents, generate instances"
 
@@ -38,6 +43,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     gen.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
     gen.add_argument("--only", action="append", default=[], metavar="ID",
                      help="only this type (repeatable)")
+    gen.add_argument("--family", action="append", default=[], metavar="F",
+                     choices=[*FAMILIES, "all"],
+                     help="structurally different variants of this family (repeatable; all "
+                          "for every one): " + "; ".join(f"{k}: {v}" for k, v in FAMILIES.items()))
+    gen.add_argument("--record", action="store_true",
+                     help="with --family and -o: also write each kept variant's accident "
+                          "recording (DIR/<name>.mcap)")
     gen.add_argument("--json", action="store_true", help="print the counts as JSON")
 
 
@@ -118,6 +130,10 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
 
     if args.instances < 1:
         raise UsageError("--instances must be >= 1")
+    if args.record and not (args.family and args.output):
+        raise UsageError("--record needs --family and -o DIR (where the recordings go)")
+    if args.family:
+        return _generate_variants(args, env)
     out_dir = Path(args.output) if args.output else None
     rows = []
     written: list[str] = []
@@ -144,6 +160,55 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
     if args.json:
         print(json.dumps(rows, indent=2), file=env.stdout)
     return 0
+
+
+def _generate_variants(args: argparse.Namespace, env: Env) -> int:
+    from rocas._fs import atomic_path
+    from rocas.scenarios.variants import generate_variants, variant_toml
+
+    families = list(FAMILIES) if "all" in args.family else list(dict.fromkeys(args.family))
+    out_dir = Path(args.output) if args.output else None
+    rows = []
+    written: list[str] = []
+    try:
+        for e in _selected(args.only):
+            for family in families:
+                rep = generate_variants(e, family, args.instances, seed=args.seed)
+                rows.append({"id": e.id, "key": e.key, "family": family, "tried": rep.tried,
+                             "invalid": rep.invalid, "crashed": rep.crashed,
+                             "fix_holds": rep.fix_holds, "kept": len(rep.variants),
+                             "reference_avoids": sum(v.reference_avoids for v in rep.variants),
+                             "variants": [v.name for v in rep.variants]})
+                if out_dir is not None:
+                    for v in rep.variants:
+                        with atomic_path(out_dir / f"{v.name}.toml") as tmp:
+                            tmp.write_text(variant_toml(v), encoding="utf-8")
+                        written.append(f"{v.name}.toml")
+                        if args.record:
+                            _record_variant(v, out_dir)
+                if not args.json:
+                    fixed = (f", the documented fix repairs {rep.fix_holds}" if e.truth.fixable
+                             else " (no fix exists to check)")
+                    invalid = f" ({rep.invalid} not valid scenarios)" if rep.invalid else ""
+                    print(f"{e.id} {family}: {rep.crashed}/{rep.tried} tried variants crash"
+                          f"{invalid}{fixed}; kept {len(rep.variants)}", file=env.stdout)
+    except KeyboardInterrupt as exc:
+        exc.kept = _kept(written, out_dir, "variant file")  # type: ignore[attr-defined]
+        raise
+    if args.json:
+        print(json.dumps(rows, indent=2), file=env.stdout)
+    return 0
+
+
+def _record_variant(v, out_dir: Path) -> None:  # noqa: ANN001
+    """The variant's accident recording, as ``rocas catalog record`` writes an entry's."""
+    from rocas.scenarios.catalog import accident_matches
+    from rocas.sim.engine import simulate
+
+    res = simulate(v.scenario, output=out_dir / f"{v.name}.mcap")
+    if not accident_matches(v.entry.truth, res.outcome):  # the check simulated the same run
+        raise UsageError(f"{v.name}: the recording does not end in the documented accident "
+                         f"({res.outcome.summary()})")
 
 
 def _kept(written: list[str], where: Path | None, what: str) -> str:

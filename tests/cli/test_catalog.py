@@ -52,3 +52,25 @@ def test_unknown_entry_and_bad_count_are_usage_errors(rocas, tmp_path):
     assert r.code != 0 and "no catalog entry" in r.stderr
     r = rocas("catalog", "generate", "--instances", "0")
     assert r.code != 0 and "--instances" in r.stderr
+
+
+def test_generate_family_writes_variants_with_their_ground_truth_and_recordings(rocas, tmp_path):
+    from rocas.scenarios.variants import load_variant
+
+    r = rocas("catalog", "generate", "--family", "rotate", "--instances", "1", "--only", "A10",
+              "-o", tmp_path, "--record", "--json")
+    assert r.code == 0, r.stderr
+    row = json.loads(r.stdout)[0]
+    assert row["family"] == "rotate" and row["kept"] == 1
+    assert row["tried"] >= row["crashed"] >= row["fix_holds"] >= 1
+    (name,) = row["variants"]
+    v = load_variant(tmp_path / f"{name}.toml")
+    assert v.truth.id == "A10" and v.scenario.name == name
+    assert (tmp_path / f"{name}.mcap").stat().st_size > 0
+
+
+def test_generate_family_and_record_misuse_are_usage_errors(rocas, tmp_path):
+    r = rocas("catalog", "generate", "--instances", "1", "--record", "-o", tmp_path)
+    assert r.code != 0 and "--record needs --family" in r.stderr
+    r = rocas("catalog", "generate", "--instances", "1", "--family", "teleport")
+    assert r.code != 0 and "teleport" in r.stderr

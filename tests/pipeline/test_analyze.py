@@ -269,19 +269,21 @@ def test_a_damaged_run_directory_is_an_input_error(red_truck, serial_run, tmp_pa
     with pytest.raises(InputError, match="state.json") as err:
         analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)
     assert f"delete {out}" in err.value.hint
-    # a search checkpoint cut short by a crash
+    # a search checkpoint cut short by a crash (the cyber search without screening: a screening
+    # that finds a fix, here the physical one, ends its search before any generation)
     out = tmp_path / "ckpt"
+    plain = replace(CFG, screening=False)
 
     def stop_after_a_generation(phase, info):  # the first one is checkpointed by then
-        if phase == "physical" and info.get("generation", 0) > 1:
+        if phase == "cyber" and info.get("generation", 0) > 1:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        analyze(red_truck, out, CFG, executor=SerialExecutor(), progress=stop_after_a_generation)
-    ckpt = out / "physical.ckpt"
+        analyze(red_truck, out, plain, executor=SerialExecutor(), progress=stop_after_a_generation)
+    ckpt = out / "cyber.ckpt"
     ckpt.write_bytes(ckpt.read_bytes()[:100])
-    with pytest.raises(InputError, match="physical.ckpt") as err:
-        analyze(red_truck, out, CFG, executor=SerialExecutor(), resume=True)
+    with pytest.raises(InputError, match="cyber.ckpt") as err:
+        analyze(red_truck, out, plain, executor=SerialExecutor(), resume=True)
     assert "delete" in err.value.hint
 
 

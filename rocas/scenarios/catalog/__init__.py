@@ -222,16 +222,21 @@ def _load_all() -> tuple[CatalogEntry, ...]:
     for f in sorted(_root().iterdir(), key=lambda p: p.name):
         if not (f.name.startswith("a") and f.name.endswith(".toml")):
             continue
-        key = f.name[:-5]
-        source = f"catalog/{f.name}"
-        data = tomllib.loads(f.read_text(encoding="utf-8"))
-        truth_doc = data.pop("ground_truth", None)
-        if truth_doc is None:
-            raise ScenarioError(f"{source}: no [ground_truth] table")
-        scenario = scenario_from_dict(data, source=source)
-        out.append(CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source),
-                                document=data))
+        out.append(entry_from_document(tomllib.loads(f.read_text(encoding="utf-8")),
+                                       key=f.name[:-5], source=f"catalog/{f.name}"))
     return tuple(out)
+
+
+def entry_from_document(data: Mapping[str, Any], key: str, source: str) -> CatalogEntry:
+    """A catalog entry from a parsed catalog-format document (a scenario plus its
+    ``[ground_truth]`` table): the shipped entries and generated variants' files alike."""
+    data = dict(data)
+    truth_doc = data.pop("ground_truth", None)
+    if not isinstance(truth_doc, Mapping):
+        raise ScenarioError(f"{source}: no [ground_truth] table")
+    scenario = scenario_from_dict(data, source=source)
+    return CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source),
+                        document=data)
 
 
 def entries() -> tuple[CatalogEntry, ...]:
@@ -384,7 +389,8 @@ def trajectory_rmse(a: np.ndarray, b: np.ndarray, times: np.ndarray, until_s: fl
 
 
 __all__ = ["PRE_ACCIDENT_MARGIN_S", "PRE_ACCIDENT_RMSE_M", "CatalogEntry", "GroundTruth",
-           "InstanceReport", "accident_matches", "accident_time", "entries", "entry", "fix_holds",
+           "InstanceReport", "accident_matches", "accident_time", "entries", "entry",
+           "entry_from_document", "fix_holds",
            "generate_instances", "mutate",
            "scenario_toml", "trajectory_rmse"]
 
