@@ -76,6 +76,15 @@ def _mark(ok: bool) -> str:
     return "[green]✓[/green]" if ok else "[red]✗[/red]"
 
 
+def _confidence_cell(c: dict | None) -> str:
+    if not c:
+        return "—"
+    text = f"{c['level']} {c['same']}/{c['runs']}"
+    if c["stance"]:
+        text += f", subst. {c['stance']}"
+    return text
+
+
 def render(res: dict, env: Env) -> None:
     from rich.table import Table
 
@@ -84,7 +93,7 @@ def render(res: dict, env: Env) -> None:
     con = env.out()
     t = Table(title=f"Table 4 for the built-in ADS: {res['hits']} of {res['total']} hit")
     for c in ("id", "trigger found", "module (expected)", "misconfiguration found (expected)",
-              "verdict", "s"):
+              "verdict", "confidence", "s"):
         t.add_column(c)
     for r in res["entries"]:
         e, f, m = r["expected"], r["found"], r["marks"]
@@ -97,8 +106,15 @@ def render(res: dict, env: Env) -> None:
         t.add_row(r["type"], trig,
                   f"{_mark(m['module'])} {f['deviating_module'] or '—'} ({e['deviating_module']})",
                   f"{_mark(m['parameter'])} {found} ({wanted})",
-                  f"{_mark(m['verdict'])} {f['verdict']}", f"{r['seconds']:.1f}")
+                  f"{_mark(m['verdict'])} {f['verdict']}", _confidence_cell(r.get("confidence")),
+                  f"{r['seconds']:.1f}")
     con.print(t)
+    a = res.get("agreement")
+    if a and a["analyses"]:
+        con.print(f"Confidence: {a['stable']} stable, {a['contested']} contested, {a['unstable']} unstable "
+                  f"of {a['analyses']}; references unanimous in {a['unanimous']}, another reference "
+                  f"adopted in {a['adopted']}; module substitution agrees or is consistent in "
+                  f"{a['second_opinion_agrees']}")
     tb = res["time_breakdown"]
     con.print("Time per phase: " + ", ".join(f"{k} {100 * v:.1f} %" for k, v in tb.items())
               + f" (total {res['time_total_s']:.1f} s; the paper: 16.4 % physical, 7.3 % diff, 76.3 % cyber)")
@@ -127,6 +143,11 @@ def render_seeds(res: dict, env: Env) -> None:
         t.add_row(row["type"], *(f"{_mark(row['hits'][s])} {row['found'][s]['module'] or '—'}"
                                  for s in seeds))
     t.add_row("hits", *(f"{res['hits_per_seed'][s]} of {res['total']}" for s in seeds))
+    per_seed = res.get("agreement_per_seed") or {}
+    if all(s in per_seed and per_seed[s]["analyses"] for s in seeds):
+        t.add_row("stable / contested / unstable",
+                  *(f"{per_seed[s]['stable']} / {per_seed[s]['contested']} / {per_seed[s]['unstable']}"
+                    for s in seeds))
     env.out().print(t)
     if res["median_seconds"] is not None:
         env.out().print(f"Median rocas analyze: {res['median_seconds']:.1f} s")

@@ -82,6 +82,29 @@ def _scope_run(report: dict[str, Any], found: dict[str, Any], marks: dict[str, b
             "seconds": round(sum(report["timings_s"].values()), 2)}
 
 
+def _confidence(report: dict[str, Any]) -> dict[str, Any] | None:
+    """An analysis's confidence in short: level, agreement of the references, whether another
+    reference was adopted, and module substitution's stance and module."""
+    c = report.get("confidence")
+    if not c:
+        return None
+    second = c.get("second_opinion") or {}
+    return {"level": c["level"], "same": c["agreement"]["same"], "runs": c["agreement"]["runs"],
+            "adopted": bool(c.get("adopted")), "stance": second.get("stance"),
+            "substitution": second.get("module")}
+
+
+def agreement_summary(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
+    """How many analyses ended stable, contested or unstable, how many adopted another
+    reference, and how many the second opinion agreed with (or was consistent with)."""
+    conf = [r["confidence"] for r in rows if r.get("confidence")]
+    return {"analyses": len(conf),
+            **{lvl: sum(c["level"] == lvl for c in conf) for lvl in ("stable", "contested", "unstable")},
+            "adopted": sum(c["adopted"] for c in conf),
+            "unanimous": sum(c["same"] == c["runs"] for c in conf),
+            "second_opinion_agrees": sum(c["stance"] in ("agrees", "consistent") for c in conf)}
+
+
 def recording_for(key: str, directory: Path) -> Path | None:
     hits = sorted(directory.glob(f"{key.split('_', 1)[0]}*.mcap"))
     return hits[0] if hits else None
@@ -121,7 +144,8 @@ def run_bench(
                      "seconds": round(seconds, 2), "timings_s": report["timings_s"],
                      "evaluations": report["evaluations"], "search_space": report["search_space"],
                      "first_fix_evaluation": report.get("first_fix_evaluation"),
-                     "first_fix_batch_evaluations": report.get("first_fix_batch_evaluations")})
+                     "first_fix_batch_evaluations": report.get("first_fix_batch_evaluations"),
+                     "confidence": _confidence(report)})
 
     totals: dict[str, float] = {}
     for r in rows:
@@ -171,6 +195,7 @@ def run_bench(
         "entries": rows,
         "hits": sum(r["hit"] for r in rows),
         "total": len(rows),
+        "agreement": agreement_summary(rows),
         "time_breakdown": {k: round(v / whole, 4) for k, v in totals.items()},
         "time_total_s": round(whole, 2),
         "search_space_reduction_mean": sum(reductions) / len(reductions) if reductions else None,
@@ -209,4 +234,6 @@ def run_bench_seeds(
             "total": runs[0]["total"],
             "entries": list(per_entry.values()),
             "every_seed": sum(all(row["hits"].values()) for row in per_entry.values()),
+            "agreement_per_seed": {str(s): agreement_summary(res["entries"])
+                                   for s, res in zip(seeds, runs, strict=True)},
             "median_seconds": seconds[len(seconds) // 2] if seconds else None}

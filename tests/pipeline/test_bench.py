@@ -89,3 +89,17 @@ def test_bench_over_seeds_tables_the_hits_per_entry_and_seed(tmp_path, monkeypat
     assert res["median_seconds"] == 13.0
     with pytest.raises(UsageError, match="repeats"):
         bench.run_bench_seeds(None, tmp_path, AnalyzeConfig(), [1, 1])
+
+
+def test_the_agreement_summary_counts_levels_adoptions_and_the_second_opinion():
+    def row(level, same, runs, adopted, stance):
+        return {"confidence": {"level": level, "same": same, "runs": runs, "adopted": adopted,
+                               "stance": stance, "substitution": None}}
+
+    rows = [row("stable", 3, 3, False, "agrees"), row("contested", 2, 3, True, "disagrees"),
+            row("unstable", 1, 3, False, "consistent"), {"confidence": None}]
+    from rocas.pipeline import bench
+
+    assert bench.agreement_summary(rows) == {
+        "analyses": 3, "stable": 1, "contested": 1, "unstable": 1, "adopted": 1, "unanimous": 1,
+        "second_opinion_agrees": 2}
