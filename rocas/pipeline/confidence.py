@@ -11,10 +11,11 @@ its answer agrees.
 
 The verdict on the answer:
 
-- ``stable``: a clear majority of the references name the module (more than half), and
-  substitution agrees with it or is consistent with it;
-- ``contested``: a clear majority, but substitution disagrees (the report says why it may);
-- ``unstable``: no clear majority: the module depends on which reference was chosen.
+- ``stable``: more than half of the references name the module, and substitution agrees with
+  it or is consistent with it (or was not asked);
+- ``contested``: one of the two supports it: more than half of the references but substitution
+  disagrees, or substitution but not more than half of the references;
+- ``unstable``: neither does: do not act on the answer alone.
 """
 
 from __future__ import annotations
@@ -58,31 +59,39 @@ def alternate_references(front: list[dict[str, Any]], chosen: dict[str, Any], co
     return out
 
 
-def agreement(modules: list[str | None]) -> dict[str, Any]:
-    """The majority answer among the references' modules (ties: the best-ranked reference's
-    answer, i.e. the earliest in ``modules``), how many name it, and the runner-up."""
+def agreement(modules: list[str | None], reported: int = 0) -> dict[str, Any]:
+    """How many of the references' modules name the one reported (``modules[reported]``), the
+    majority's module (ties: the earliest, best-ranked answer) and the most frequent other."""
     counts = Counter(modules)
+    module = modules[reported]
     best = max(counts.values())
     majority = next(m for m in modules if counts[m] == best)
-    others = [(n, m) for m, n in counts.most_common() if m != majority]
-    return {"module": majority, "runs": len(modules), "same": best,
+    others = [(n, m) for m, n in counts.most_common() if m != module]
+    return {"module": module, "runs": len(modules), "same": counts[module], "majority": majority,
             "runner_up": {"module": others[0][1], "runs": others[0][0]} if others else None}
+
+
+_SUPPORTS = ("agrees", "consistent")
 
 
 def level(agree: dict[str, Any], stance: str | None) -> str:
     """stable / contested / unstable (see the module docstring)."""
-    if 2 * agree["same"] <= agree["runs"]:
-        return "unstable"
-    if stance == "disagrees":
+    majority = 2 * agree["same"] > agree["runs"]
+    supported = stance in _SUPPORTS
+    if majority and (supported or stance is None):
+        return "stable"
+    if majority or supported:
         return "contested"
-    return "stable"
+    return "unstable"
 
 
 def phase_confidence(run: Run) -> dict[str, Any]:
-    """Diff the accident against alternate references, adopt the majority's answer, and ask
-    module substitution. Returns the phase's result; when the majority's module is not the
-    chosen reference's, the best-ranked reference that names it becomes the reference
-    (reference.mcap, diff.json and the diff phase's summary are rewritten for it)."""
+    """Diff the accident against alternate references and ask module substitution. Returns
+    the phase's result. When the references' majority names another module than the chosen
+    reference, and module substitution supports the majority's module but not the chosen
+    one's, the majority's best-ranked reference becomes the reference (reference.mcap,
+    diff.json and the diff phase's summary are rewritten for it): two independent methods
+    outweigh one reference. Otherwise the chosen reference's answer stands."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.substitution import second_opinion
     from rocas.sim.engine import simulate
@@ -106,20 +115,27 @@ def phase_confidence(run: Run) -> dict[str, Any]:
         diffs.append(found)
         answers.append({"reference": path.name, "mutation": cand["mutation"],
                         "module": found.deviating_module, "path": found.to_json()["path"]})
-    agree = agreement([a["module"] for a in answers])
-    adopted = next(i for i, a in enumerate(answers) if a["module"] == agree["module"])
-    result: dict[str, Any] = {"agreement": agree, "answers": answers, "adopted": adopted}
     simulations = len(alternates)
-    if adopted:
+    result: dict[str, Any] = {"answers": answers}
+    opinion = None
+    if run.cfg.second_opinion:
+        opinion = second_opinion(scn)
+        simulations += len(opinion.runs) + 1
+    majority = agreement([a["module"] for a in answers])["majority"]
+    adopted = 0
+    chosen_module = answers[0]["module"]
+    if (opinion is not None and majority != chosen_module and opinion.stance(majority) in _SUPPORTS
+            and opinion.stance(chosen_module) == "disagrees"):
+        adopted = next(i for i, a in enumerate(answers) if a["module"] == majority)
         result["triggering_entity"] = triggering_entity(scn, Mutation(dict(answers[adopted]["mutation"])))
         _adopt(run, answers[adopted], diffs[adopted])
         simulations += 1
+    agree = agreement([a["module"] for a in answers], adopted)
+    result |= {"agreement": agree, "adopted": adopted}
     stance = None
-    if run.cfg.second_opinion:
-        opinion = second_opinion(scn)
+    if opinion is not None:
         stance = opinion.stance(agree["module"])
         result["second_opinion"] = {**opinion.to_dict(), "stance": stance}
-        simulations += len(opinion.runs) + 1
     result["level"] = level(agree, stance)
     result["note"] = note(result)
     run.finish("confidence", result, time.perf_counter() - t0, simulations)
@@ -160,15 +176,20 @@ def note(result: dict[str, Any]) -> str:
     if agree["runner_up"]:
         r = agree["runner_up"]
         text += f" ({r['runs']} name{'s' if r['runs'] == 1 else ''} {r['module'] or 'no module'})"
+    first = result["answers"][0]["module"] or "no module"
     if result.get("adopted"):
-        text += (f"; the chosen reference named "
-                 f"{result['answers'][0]['module'] or 'no module'}, so the majority's best-ranked "
-                 f"reference ({result['answers'][result['adopted']]['reference']}) is used")
+        text += (f"; the chosen reference named {first}, but the majority and module substitution "
+                 f"name {module or 'no module'}, so the majority's best-ranked reference "
+                 f"({result['answers'][result['adopted']]['reference']}) is used")
+    elif agree.get("majority", module) != module:
+        text += (f"; the majority names {agree['majority'] or 'no module'}, which module substitution "
+                 f"does not support, so the chosen reference's answer stands")
     second = result.get("second_opinion")
     if second:
         text += f"; {_STANCE_WORDS[second['stance']]}"
         if second["stance"] == "disagrees" and second.get("module"):
             text += f" ({second['module']})"
     if result["level"] == "unstable":
-        text += ". Unstable: the module depends on which reference is compared; do not act on it alone"
+        text += (". Unstable: neither most references nor module substitution support it; "
+                 "do not act on it alone")
     return text + "."

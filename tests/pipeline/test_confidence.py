@@ -20,14 +20,17 @@ def test_alternates_change_other_properties_than_the_chosen_one_and_each_other()
     assert len(alternate_references(front, chosen, 9)) == 3
 
 
-def test_the_majority_wins_and_ties_go_to_the_best_ranked_reference():
+def test_agreement_counts_the_reported_module_and_names_the_majority():
     assert agreement(["planning", "perception", "perception"]) == {
-        "module": "perception", "runs": 3, "same": 2,
+        "module": "planning", "runs": 3, "same": 1, "majority": "perception",
+        "runner_up": {"module": "perception", "runs": 2}}
+    assert agreement(["planning", "perception", "perception"], 1) == {
+        "module": "perception", "runs": 3, "same": 2, "majority": "perception",
         "runner_up": {"module": "planning", "runs": 1}}
-    assert agreement(["planning", "perception"])["module"] == "planning"
+    assert agreement(["planning", "perception"])["majority"] == "planning"  # a tie: the best-ranked
     assert agreement(["prediction"]) == {"module": "prediction", "runs": 1, "same": 1,
-                                         "runner_up": None}
-    assert agreement([None, None, "planning"])["module"] is None
+                                         "majority": "prediction", "runner_up": None}
+    assert agreement([None, None, "planning"])["majority"] is None
 
 
 def test_level():
@@ -35,20 +38,24 @@ def test_level():
     assert level({"runs": 3, "same": 2}, "consistent") == "stable"
     assert level({"runs": 3, "same": 2}, None) == "stable"
     assert level({"runs": 3, "same": 2}, "disagrees") == "contested"
-    assert level({"runs": 2, "same": 1}, "agrees") == "unstable"
-    assert level({"runs": 3, "same": 1}, "agrees") == "unstable"
+    assert level({"runs": 3, "same": 1}, "consistent") == "contested"
+    assert level({"runs": 2, "same": 1}, "disagrees") == "unstable"
+    assert level({"runs": 3, "same": 1}, None) == "unstable"
 
 
 def test_the_note_says_what_was_adopted_and_what_substitution_says():
-    result = {"agreement": agreement(["planning", "perception", "perception"]),
-              "answers": [{"reference": "reference.mcap", "module": "planning"},
-                          {"reference": "reference_1.mcap", "module": "perception"},
-                          {"reference": "reference_2.mcap", "module": "perception"}],
-              "adopted": 1, "level": "contested",
-              "second_opinion": {"stance": "disagrees", "module": "prediction"}}
-    text = note(result)
+    answers = [{"reference": "reference.mcap", "module": "planning"},
+               {"reference": "reference_1.mcap", "module": "perception"},
+               {"reference": "reference_2.mcap", "module": "perception"}]
+    adopted = {"agreement": agreement([a["module"] for a in answers], 1), "answers": answers,
+               "adopted": 1, "level": "stable",
+               "second_opinion": {"stance": "agrees", "module": "perception"}}
+    text = note(adopted)
     assert text.startswith("2 of 3 references name perception (1 names planning)")
-    assert "reference_1.mcap" in text and "(prediction)" in text
-    result |= {"agreement": agreement(["planning", "perception", None]), "adopted": 0,
-               "level": "unstable"}
-    assert "Unstable" in note(result)
+    assert "reference_1.mcap" in text and "module substitution names the same module" in text
+    kept = {"agreement": agreement([a["module"] for a in answers]), "answers": answers, "adopted": 0,
+            "level": "contested", "second_opinion": {"stance": "consistent", "module": None}}
+    text = note(kept)
+    assert text.startswith("1 of 3 references name planning (2 name perception)")
+    assert "the chosen reference's answer stands" in text
+    assert "Unstable" in note(kept | {"level": "unstable"})
