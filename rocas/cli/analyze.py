@@ -222,7 +222,10 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     t.add_column(style="bold")
     t.add_column()
     acc = report["accident"]
-    t.add_row("verdict", report["verdict"].replace("_", " "))
+    t.add_row("verdict", report["verdict"].replace("_", " ")
+              + ("" if report.get("complete", True) else "  (from less than the whole recording)"))
+    for w in report.get("warnings", []):
+        t.add_row("warning", w)
     if report.get("replay"):
         t.add_row("replay", replay_text(report))
     if acc:

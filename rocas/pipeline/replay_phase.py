@@ -39,7 +39,9 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
             result = {"source": "recording", "reproduced": bool(report.reproduced),
                       "recorded_accident": report.original.to_dict() if report.original else None,
                       "accident": report.accident.to_dict() if report.accident else None,
-                      "ego_rmse_m": report.ego_rmse_m, "compared_until_s": report.compared_until_s}
+                      "ego_rmse_m": report.ego_rmse_m, "compared_until_s": report.compared_until_s,
+                      # damage the reader found: the analysis used less than the whole recording
+                      "warnings": list(recon.warnings), "complete": recon.complete}
         else:
             assert scenario is not None
             res = simulate(scenario, output=run.out / "accident.mcap")

@@ -71,6 +71,9 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "first_fix_evaluation": cyber.get("first_fix_evaluation"),
         "first_fix_batch_evaluations": cyber.get("first_fix_batch_evaluations"),
         "evaluations": dict(state["evaluations"]),
+        # a result computed from less than the whole recording says so (docs/errors.md)
+        "warnings": list((done.get("replay") or {}).get("warnings", [])),
+        "complete": bool((done.get("replay") or {}).get("complete", True)),
         "timings_s": dict(state["timings_s"]),
     }
     entity_phrase = "the world"
@@ -194,6 +197,9 @@ def robust_text(report: dict[str, Any], arrow: str = "→") -> str:
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
+    if report.get("warnings"):
+        lines[3:3] = ["**Computed from less than the whole recording:**", "",
+                      *(f"- {w}" for w in report["warnings"]), ""]
     if report.get("settings"):
         lines.append(f"- **Settings**: {settings_text(report)}")
     if report.get("replay"):

@@ -59,3 +59,19 @@ def test_a_fix_that_changes_the_earlier_trajectory_is_named_as_the_nearest_not_a
     assert ("The nearest one, planning.max_accel_mps2 to 0.4, avoids the accident but changes the "
             "ego's trajectory before 6.0 s by h1 = 3.5 m^2, over the limit of 1 m^2."
             ) in report["explanation"]
+
+
+def test_a_replay_from_less_than_the_whole_recording_says_so_everywhere():
+    acc = {"kind": "emergency", "time_s": 10.15, "other": None}
+    rep = {"source": "recording", "reproduced": True, "recorded_accident": acc, "accident": acc,
+           "ego_rmse_m": 0.03, "compared_until_s": 10.2, "complete": False,
+           "warnings": ["a.mcap: skipped a corrupted chunk at byte 4096 (312 messages)"]}
+    report = build_report(_state(rep), Accident("emergency", 10.15, None), "no_reference")
+    assert report["complete"] is False and report["warnings"] == rep["warnings"]
+    md = markdown(report)
+    assert "less than the whole recording" in md and "skipped a corrupted chunk" in md
+    whole = build_report(_state(rep | {"complete": True, "warnings": []}), None, "no_reference")
+    assert whole["complete"] is True and "less than the whole" not in markdown(whole)
+    # a run directory from before the replay kept its warnings reads as complete
+    old = {k: v for k, v in rep.items() if k not in ("complete", "warnings")}
+    assert build_report(_state(old), None, "no_reference")["complete"] is True
