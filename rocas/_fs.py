@@ -17,6 +17,8 @@ from pathlib import Path
 from rocas.errors import OutputError, UsageError
 
 _FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
+#: a write that failed for the place, not for rocas: full, over a size limit, read-only
+_WRITE_FAILED = _FULL | {errno.EFBIG, errno.EROFS}
 
 
 @contextlib.contextmanager
@@ -41,7 +43,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
-        if isinstance(exc, OSError) and exc.errno in _FULL:
+        if isinstance(exc, OSError) and exc.errno in _WRITE_FAILED:
             raise _output_error(final, exc) from exc
         raise
 

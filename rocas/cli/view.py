@@ -151,9 +151,8 @@ def _spawn_native(out: Path, args: argparse.Namespace) -> tuple[int, bool]:
 
 
 def _serve_web(out: Path, args: argparse.Namespace, env: Env) -> int:
+    from rocas.viz.stream import new_recording_id  # noqa: I001 - first: it quiets Rerun's logs
     import rerun as rr
-
-    from rocas.viz.stream import new_recording_id
 
     rec = rr.RecordingStream("rocas", recording_id=new_recording_id("view"))
     url = rec.serve_grpc(grpc_port=args.grpc_port)

@@ -45,6 +45,7 @@ from mcap.records import (
 
 from rocas.errors import InputError, RecordingError
 from rocas.recording.decoding import DecoderCache
+from rocas.recording.integrity import CHECKSUM_KEY, checksum_problem
 
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD_HEADER = struct.Struct("<BQ")
@@ -444,7 +445,11 @@ class Recording:
                 return
             elif opcode == Opcode.METADATA:
                 md = Metadata.read(stream)
-                self._metadata.append((md.name, dict(md.metadata)))
+                problem = checksum_problem(md.name, md.metadata)
+                if problem is not None:
+                    raise _BadRecord(offset, f"{problem}; not used")
+                self._metadata.append(
+                    (md.name, {k: v for k, v in md.metadata.items() if k != CHECKSUM_KEY}))
                 return
             elif opcode == Opcode.ATTACHMENT:
                 rec = Attachment.read(stream)

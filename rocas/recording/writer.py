@@ -15,6 +15,7 @@ from mcap_protobuf.schema import register_schema
 
 from rocas._fs import atomic_path
 from rocas.errors import UsageError
+from rocas.recording.integrity import with_checksum
 from rocas.recording.topology import merge_topology_metadata
 
 #: MCAP profile string rocas writes into headers of its own recordings.
@@ -169,8 +170,9 @@ class RecordingWriter:
         )
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
-        """Add a metadata record (string key/value pairs)."""
-        self._writer.add_metadata(name, dict(data))
+        """Add a metadata record (string key/value pairs) with its checksum
+        (:mod:`rocas.recording.integrity`), which the reader verifies."""
+        self._writer.add_metadata(name, with_checksum(name, data))
 
     def close(self) -> None:
         """Finish the file and move it to its final name."""

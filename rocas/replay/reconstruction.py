@@ -25,6 +25,11 @@ from rocas.sim.oracles import HARD_BRAKE_MPS2, MOVED_MPS, STANDSTILL_MPS, UNEXPE
 
 #: How far (s) a track is extrapolated past its ends when naming a collision partner.
 PARTNER_EXTRAPOLATION_S = 1.0
+#: Largest distance [m] and speed difference [m/s] between the start the ``rocas.ego`` record
+#: describes and the first recorded pose that still count as the same start (the recorded
+#: pose carries localization noise: at most 0.04 m and 0.04 m/s over the shipped catalog).
+START_TOLERANCE_M = 0.5
+START_TOLERANCE_MPS = 0.5
 
 
 @dataclass(frozen=True)
@@ -59,9 +64,11 @@ class Reconstruction:
             recording's damage (the lines of ``warnings`` come first).
         path: the recording.
         warnings: what the reader found: damage (truncation, skipped chunks, counts that
-            disagree with the summary section), undecodable messages, one line each. Empty
-            when the whole recording was read; a reconstruction with warnings may differ from
-            the one the whole file would give.
+            disagree with the summary section), undecodable messages, and parts of the
+            recording that disagree (the start the ``rocas.ego`` record describes is not where
+            the first recorded pose is), one line each. Empty when the whole recording was read
+            and agrees with itself; a reconstruction with warnings may differ from the one the
+            whole, undamaged file would give.
     """
 
     scenario: Scenario
@@ -224,6 +231,12 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     for tr in tracks:
         notes.extend(f"{tr.name}: {n}" for n in tr.notes)
     scenario = dataclasses.replace(base, actors=actors, ego=_sorted_params(base.ego))
+    warnings = list(rec.warnings)
+    if meta is not None:
+        mismatch = _start_mismatch(scenario, rec)
+        if mismatch is not None:
+            warnings.append(f"{rec.path}: {mismatch}")
+            notes.insert(len(rec.warnings), warnings[-1])
     kind, t, partner, summary = _original_accident(rec, notes)
     original = None
     if kind:
@@ -242,7 +255,26 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     return Reconstruction(scenario=scenario, original=original, ego_track=rec.ego_track,
                           times=rec.ego_times, tracks=tracks, original_summary=summary,
                           recorded_partner=partner, notes=tuple(notes), path=rec.path,
-                          warnings=rec.warnings)
+                          warnings=tuple(warnings))
+
+
+def _start_mismatch(scenario: Scenario, rec: RecordedRun) -> str | None:
+    """How the ego's start in ``scenario`` (from the ``rocas.ego`` record) misses the first
+    recorded pose, or None when they agree (or the pose series does not begin at the start)."""
+    if rec.ego_times[0] > scenario.dt_s + 1e-9:  # the first poses were lost: nothing to compare
+        return None
+    ego = scenario.ego
+    lanes = scenario.lane_by_id
+    pts = np.vstack([np.asarray(lanes[r].centerline, dtype=np.float64) for r in ego.route])
+    s, lat, _ = project(pts, rec.ego_track[0, :2])
+    off = float(np.hypot(s - ego.start_s_m, lat - ego.start_lateral_m))
+    dv = abs(float(rec.ego_track[0, 3]) - ego.start_speed_mps)
+    if off <= START_TOLERANCE_M and dv <= START_TOLERANCE_MPS:
+        return None
+    return (f"the ego's start in the rocas.ego record (s={ego.start_s_m:.2f} m, lateral "
+            f"{ego.start_lateral_m:.2f} m, {ego.start_speed_mps:.2f} m/s) is {off:.2f} m and "
+            f"{dv:.2f} m/s from the first recorded pose: the record does not describe this run "
+            "(damaged?), so the replayed scenario may not be the recorded one")
 
 
 def _sorted_params(ego: Ego) -> Ego:

@@ -12,12 +12,13 @@ import contextlib
 import multiprocessing
 import os
 import signal
-import threading
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from types import TracebackType
 from typing import Any, Protocol, TypeVar
 
+from rocas._worker import STOP_SIGNALS, start_worker
 from rocas.errors import UsageError
 
 T = TypeVar("T")
@@ -57,18 +58,19 @@ class LocalExecutor:
     """A process pool over this machine's cores (spawned workers, kept for reuse).
 
     Each task goes to a worker on its own and a worker is given its next task only when it
-    has returned its last one, so at most one task per worker is under way at any time. An
-    interruption (Ctrl-C, SIGTERM) therefore waits for at most one task per worker, not for
-    a share of the whole list: callers keep tasks small (:func:`rocas.pipeline.evaluate.evaluate`
-    sends batches of at most ``batch_size`` simulations). Results come back in task order.
-    With one worker (or one task) it runs in-process, without a pool.
+    has returned its last one, so at most one task per worker is under way at any time.
+    Results come back in task order. With one worker (or one task) it runs in-process, without
+    a pool.
 
-    A worker exits as soon as the process that started it is gone, even killed (SIGKILL),
-    instead of running on as an orphan: it waits on the sentinel multiprocessing gives every
-    spawned process (a pipe on POSIX, the parent's handle on Windows). Workers ignore SIGINT and
-    SIGTERM, from their start: a terminal's Ctrl-C or ``timeout`` signals the whole process
-    group, and stopping is the main process's decision (it ends the workers as it closes the
-    pool), not a worker's (which would break the pool, or print its own traceback).
+    Stopping: an interruption (Ctrl-C, SIGTERM) or any other exception in :meth:`map` ends the
+    workers at once (SIGKILL) instead of waiting for the tasks under way: tasks are pure, so
+    nothing is lost but their results, which :meth:`map` would not return anyway. Workers
+    ignore SIGINT and SIGTERM from their start (a terminal's Ctrl-C or ``timeout`` signals
+    the whole process group, and stopping is the main process's decision, not a worker's,
+    which would break the pool or print its own traceback), and exit as soon as the process
+    that started them is gone, even killed (:mod:`rocas._worker`). The pool's resource tracker
+    is started without its warning about "leaked semaphore objects": it has that to say only
+    when the main process was killed, and it removes them itself.
     """
 
     name = "local"
@@ -82,9 +84,10 @@ class LocalExecutor:
 
     def _get_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
+            _start_resource_tracker_quietly()
             ctx = multiprocessing.get_context("spawn")
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
-                                             initializer=_start_worker)
+                                             initializer=start_worker)
         return self._pool
 
     def map(self, fn: Callable[[T], R], tasks: Sequence[T]) -> list[R]:
@@ -111,10 +114,21 @@ class LocalExecutor:
                     out[under_way.pop(f)] = f.result()
                     give_next()
         except BaseException:
-            for f in under_way:  # only what already runs is left to finish (see close)
-                f.cancel()
+            self._stop_workers()
             raise
         return out
+
+    def _stop_workers(self) -> None:
+        """End the pool without waiting for the tasks under way (see the class docstring)."""
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        # ProcessPoolExecutor has no public way to end its workers; _processes (pid -> Process)
+        # has been its map of live workers since Python 3.2
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            with contextlib.suppress(OSError, ValueError, AttributeError):
+                proc.kill()
+        pool.shutdown(wait=True, cancel_futures=True)
 
     def close(self) -> None:
         if self._pool is not None:
@@ -129,44 +143,39 @@ class LocalExecutor:
         self.close()
 
 
-#: the signals that ask rocas to stop; only the main process acts on them
-_STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM") if hasattr(signal, n))
+def _start_resource_tracker_quietly() -> None:
+    """Start multiprocessing's resource tracker (if not yet running) with its "leaked
+    objects" warning filtered: the tracker is a child interpreter started with this process's
+    ``-W`` options. Without a resource tracker (Windows) nothing is done."""
+    try:
+        from multiprocessing import resource_tracker
+    except ImportError:
+        return
+    quiet = "ignore:resource_tracker:UserWarning"
+    sys.warnoptions.append(quiet)
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        sys.warnoptions.remove(quiet)
 
 
 @contextlib.contextmanager
 def _stop_signals_held() -> Iterator[None]:
     """Block the stop signals in this thread while it starts workers: a new process inherits the
-    mask, so a worker never sees them, even while it imports before :func:`_start_worker` can
-    ignore them. None is lost: one that comes meanwhile goes to another thread of this process
-    or waits for the mask to be lifted, and Python runs its handler in the main thread as usual.
+    mask, so a worker never sees them, even while it imports before
+    :func:`rocas._worker.start_worker` can ignore them. None is lost: one that comes meanwhile
+    goes to another thread of this process or waits for the mask to be lifted, and Python runs
+    its handler in the main thread as usual.
     Nothing is done where there are no signal masks.
     """
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-
-
-def _start_worker() -> None:
-    """Runs first in every worker: ignore the stop signals (see LocalExecutor), and end the
-    worker from a watcher thread when its parent is gone."""
-    for s in _STOP_SIGNALS:
-        signal.signal(s, signal.SIG_IGN)
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
-    parent = multiprocessing.parent_process()
-    if parent is not None:
-        threading.Thread(target=_exit_with, args=(parent,), name="rocas-parent-watch",
-                         daemon=True).start()
-
-
-def _exit_with(parent: Any) -> None:
-    parent.join()  # returns once the parent has exited, however it ended
-    os._exit(1)
 
 
 _REGISTRY: dict[str, Callable[[int | None], Executor]] = {}

@@ -1,7 +1,29 @@
-"""Rerun output: every phase of an analysis as entities and timelines in a ``.rrd`` file."""
+"""Rerun output: every phase of an analysis as entities and timelines in a ``.rrd`` file.
 
-from rocas.viz.diff import log_diff, write_diff_rrd
-from rocas.viz.stream import rrd_recording
+Importing this package imports the Rerun SDK with its Rust log output off (``RUST_LOG=off``,
+unless the user set ``RUST_LOG``), for rocas's own process only: the variable is removed again
+once the SDK has read it, so a viewer rocas starts logs as usual. rocas reports Rerun's
+failures itself, in one line (:mod:`rocas.viz.stream`).
+"""
+
+import os
+
+
+def _import_rerun_quietly() -> None:
+    if "RUST_LOG" in os.environ:
+        import rerun  # noqa: F401 - the user chose the level
+        return
+    os.environ["RUST_LOG"] = "off"  # read once, when the Rust bindings load
+    try:
+        import rerun  # noqa: F401
+    finally:
+        del os.environ["RUST_LOG"]
+
+
+_import_rerun_quietly()
+
+from rocas.viz.diff import log_diff, write_diff_rrd  # noqa: E402
+from rocas.viz.stream import rrd_recording  # noqa: E402
 
 __all__ = ["log_diff", "rrd_recording", "write_diff_rrd"]
 

@@ -1,4 +1,11 @@
-"""Opening a Rerun recording stream that writes a ``.rrd`` file atomically."""
+"""Opening a Rerun recording stream that writes a ``.rrd`` file atomically.
+
+rocas writes the file itself: Rerun encodes into an in-memory stream (``rerun.binary_stream``)
+and rocas writes its bytes with Python's file API. Rerun's own file sink reports a failed
+write (a full disk) only as Rust log lines on stderr, and its flush then waits forever for the
+writer thread that died; written here, a failed write is an ``OSError`` that rocas reports in
+one line (a full disk: exit 5), and no Rust log reaches the terminal (:mod:`rocas.viz`).
+"""
 
 from __future__ import annotations
 
@@ -26,19 +33,26 @@ def new_recording_id(kind: str) -> str:
 def rrd_recording(
     path: str | os.PathLike[str], blueprint: Any | None = None, kind: str = "recording"
 ) -> Iterator[Any]:
-    """Yield a ``rerun.RecordingStream`` saving to ``path``, under a fresh recording id.
+    """Yield a ``rerun.RecordingStream``; when the block ends without error, save it to ``path``.
 
-    ``kind`` names what the file holds (``diff``, ``analysis``, ``view``) in the id. The file is
-    written under a temporary name and renamed on success, after the stream is disconnected
-    (which writes the ``.rrd`` footer).
+    ``kind`` names what the file holds (``diff``, ``analysis``, ``view``) in the id;
+    ``blueprint`` becomes the file's default layout. The stream is kept in memory (the
+    ``.rrd``'s size: a few MB for an analysis) and written under a temporary name that is
+    renamed on success; nothing is written when the block raises.
+
+    Raises:
+        OutputError: the file cannot be written (a full disk, a folder not writable).
     """
     import rerun as rr
 
-    with atomic_path(path) as tmp:
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=new_recording_id(kind))
-        rec.save(tmp, default_blueprint=blueprint)
-        try:
-            yield rec
-        finally:
-            rec.flush()
-            rec.disconnect()
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id=new_recording_id(kind))
+    stream = rr.binary_stream(recording=rec)
+    if blueprint is not None:
+        rec.send_blueprint(blueprint, make_active=False, make_default=True)
+    try:
+        yield rec
+        data = stream.read(flush=True) or b""
+    finally:
+        rec.disconnect()
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        f.write(data)

@@ -12,7 +12,10 @@ replay and analyze run on the catalog inputs only (the demo recordings are scrip
 world to replay). analyze is measured by its input-dependent stage, the reconstruction: every
 later phase is a deterministic function of the reconstructed scenario, so an unchanged
 scenario is an unchanged analysis; its warnings are the reconstruction's ``warnings`` (the
-reader's damage), which the pipeline's report carries.
+reader's damage, and a ``rocas.ego`` start that misses the first recorded pose). Note: the
+pipeline (rocas/pipeline/analyze.py, ``_phase_replay``) does not yet copy these warnings into
+``replay.json``, the report or the terminal, so the analyze column says what the analysis
+*knows*, not yet what ``rocas analyze`` prints.
 
 Usage (from the repository root; ``PYTHONPATH=OTHER_CHECKOUT`` measures another version of
 rocas with the same inputs)::

@@ -181,3 +181,23 @@ def test_a_truncated_recording_says_so(recorded, tmp_path):
     stub.write_bytes(data[:4000])
     with pytest.raises(RecordingError, match="lacks; recording is truncated"):
         reconstruct(stub)
+
+
+def test_a_recorded_mission_that_misses_the_first_pose_is_a_warning(tmp_path):
+    # a record without a checksum (another writer, rocas before it: here the key is renamed)
+    # whose start speed no longer matches the run (issue 21: replayed silently as 13 m/s)
+    from pathlib import Path
+
+    src = next((Path(__file__).resolve().parents[2] / "recordings").glob("a10_*.mcap"))
+    assert reconstruct(src).complete
+    data = src.read_bytes().replace(b"rocas.crc32", b"rocas.crc3X")
+    speed = b'"start_speed_mps": 11.0'
+    assert speed in data
+    damaged = tmp_path / "damaged.mcap"
+    damaged.write_bytes(data.replace(speed, b'"start_speed_mps": 13.0'))
+    got = reconstruct(damaged)
+    assert got.scenario.ego.start_speed_mps == 13.0  # the record was used, as written
+    assert not got.complete
+    (line,) = got.warnings
+    assert "rocas.ego record" in line and "m/s from the first recorded pose" in line
+    assert got.notes[0] == line

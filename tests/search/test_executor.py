@@ -26,21 +26,25 @@ def test_results_come_back_in_task_order(tmp_path):
     assert SerialExecutor().map(executor_tasks.slow_touch, tasks) == list(range(11))
 
 
-def test_an_interruption_waits_for_at_most_one_task_per_worker(tmp_path):
+def test_an_interruption_ends_the_workers_without_waiting_for_their_tasks(tmp_path):
     # SIGINT to this process only (as kill -INT PID or a job scheduler sends it): the workers
-    # do not see it, so whatever they were given still runs before the pool closes
-    tasks = [(str(tmp_path), i, 0.05) for i in range(40)]
+    # do not see it; the tasks under way (30 s each) are dropped, not waited for
+    tasks = [(str(tmp_path), i, 0.05 if i < 2 else 30.0) for i in range(40)]
 
     def interrupt_after_two_tasks():
         _wait_for(lambda: len(os.listdir(tmp_path)) >= 2)
+        time.sleep(0.2)  # the next two tasks are under way
         os.kill(os.getpid(), signal.SIGINT)
 
     threading.Thread(target=interrupt_after_two_tasks, daemon=True).start()
-    with pytest.raises(KeyboardInterrupt), LocalExecutor(workers=2) as pool:
+    pool = LocalExecutor(workers=2)
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt), pool:
         pool.map(executor_tasks.slow_touch, tasks)
-    # two finished, two under way when the signal came, and two given to the workers while it
-    # was on its way (the whole list, 40, when each worker got half of it in one piece)
-    assert len(os.listdir(tmp_path)) <= 6
+    assert time.monotonic() - start < 20.0  # waiting for a task under way takes 30 s
+    assert sorted(os.listdir(tmp_path)) == ["task-0", "task-1"]
+    assert pool.map(executor_tasks.slow_touch, tasks[:2]) == [0, 1]  # usable again, new workers
+    pool.close()
 
 
 def _gone(pid: int) -> bool:
@@ -67,7 +71,8 @@ def test_workers_exit_when_the_main_process_is_killed(tmp_path):
               "        pool.map(executor_tasks.note_pid_and_sleep, [(sys.argv[1], 0.5)] * 100)\n")
     paths = [str(Path(rocas.__file__).parents[1]), str(Path(executor_tasks.__file__).parent)]
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
-    main = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=env)
+    main = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=env,
+                            stderr=subprocess.PIPE, text=True)
     try:
         _wait_for(lambda: len(os.listdir(tmp_path)) >= 2)
     finally:
@@ -76,3 +81,19 @@ def test_workers_exit_when_the_main_process_is_killed(tmp_path):
     workers = [int(name.removeprefix("pid-")) for name in os.listdir(tmp_path)]
     # each worker was in the middle of a 0.5 s task (and had 50 to go in its share before)
     _wait_for(lambda: all(_gone(pid) for pid in workers), timeout_s=3.0)
+    # the pipe closes once the resource tracker, which shares it, has cleaned up and exited
+    _, err = main.communicate(timeout=30)
+    assert "leaked" not in err and "Warning" not in err, err
+
+
+def test_a_worker_starts_watching_its_parent_before_any_heavy_import():
+    # a spawned worker imports its initializer's module before it runs it, and the tasks'
+    # modules only after: a parent killed while its workers start is seen at once
+    import subprocess
+    import sys
+
+    code = ("import sys, rocas._worker\n"
+            "print(' '.join(m for m in ('rocas.search', 'numpy') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert out.strip() == ""

@@ -62,3 +62,43 @@ def test_every_rrd_has_its_own_recording_id(result, tmp_path):
         ids.append(store.recording_id)
     assert ids[0] != ids[1]  # opened together, they stay two recordings
     assert all(i.startswith("rocas-diff-") for i in ids)
+
+
+@pytest.mark.skipif(not hasattr(__import__("resource"), "RLIMIT_FSIZE"), reason="POSIX limits")
+def test_a_failed_rrd_write_is_one_line_exit_5_and_no_rust_log(result, tmp_path):
+    # a file-size limit makes the write fail as a full disk does; Rerun's own file sink printed
+    # Rust log lines and then waited forever for its dead writer thread
+    import os
+    import resource
+    import signal
+    import sys
+
+    def small_files():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (16 << 10, 16 << 10))
+
+    out = tmp_path / "diff.rrd"
+    env = {k: v for k, v in os.environ.items() if k != "RUST_LOG"}
+    proc = subprocess.run(
+        [sys.executable, "-m", "rocas.cli.main", "diff", str(result.accident),
+         str(result.reference), "--rrd", str(out)],
+        capture_output=True, text=True, timeout=120, preexec_fn=small_files, env=env)
+    assert proc.returncode == 5, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert all(ln.startswith("rocas: ") for ln in lines), lines  # the pair's warning, the error
+    errors = [ln for ln in lines if ln.startswith("rocas: error:")]
+    assert len(errors) == 1 and errors[0].startswith(f"rocas: error: cannot write {out}"), lines
+    assert os.listdir(tmp_path) == []  # no .rrd, no temporary left behind
+
+
+def test_rerun_logs_are_off_for_rocas_only():
+    import os
+    import sys
+
+    code = ("import os, rocas.viz\n"
+            "import rerun_bindings\n"
+            "print('RUST_LOG' in os.environ)\n")
+    env = {k: v for k, v in os.environ.items() if k != "RUST_LOG"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, env=env)
+    assert proc.stdout.strip() == "False", proc.stderr  # a viewer rocas starts logs as usual
