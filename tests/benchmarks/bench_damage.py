@@ -12,10 +12,9 @@ replay and analyze run on the catalog inputs only (the demo recordings are scrip
 world to replay). analyze is measured by its input-dependent stage, the reconstruction: every
 later phase is a deterministic function of the reconstructed scenario, so an unchanged
 scenario is an unchanged analysis; its warnings are the reconstruction's ``warnings`` (the
-reader's damage, and a ``rocas.ego`` start that misses the first recorded pose). Note: the
-pipeline (rocas/pipeline/analyze.py, ``_phase_replay``) does not yet copy these warnings into
-``replay.json``, the report or the terminal, so the analyze column says what the analysis
-*knows*, not yet what ``rocas analyze`` prints.
+reader's damage, and a ``rocas.ego`` start that misses the first recorded pose). The pipeline's
+replay phase (rocas/pipeline/replay_phase.py) copies these warnings into ``replay.json``, and
+the report shows them (JSON ``warnings``/``complete``, report.md, the terminal).
 
 Usage (from the repository root; ``PYTHONPATH=OTHER_CHECKOUT`` measures another version of
 rocas with the same inputs)::
