@@ -28,10 +28,11 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from rocas.recording.synthetic import MixConfig
 
 _SEP = "=" * 80
 
@@ -119,31 +120,13 @@ ROS2_CMG: dict[str, Any] = {
 FIRST_DEVIATING_NODE = "prediction_node"
 
 
-@dataclass(frozen=True)
-class Ros2MixConfig:
-    """Shape of a scripted ROS 2 run.
-
-    Attributes:
-        duration_s: length of the run [s].
-        obstacles: obstacles perceived and predicted per frame.
-        forecast_points: points per predicted trajectory.
-        plan_points: poses of the planned path.
-        deviate_at_s: when prediction deviates in the accident run [s].
-        lag_s: delay from one node's deviation to the next one's [s].
-        seed: random seed (sensor noise).
-    """
-
-    duration_s: float = 30.0
-    obstacles: int = 30
-    forecast_points: int = 80
-    plan_points: int = 150
-    deviate_at_s: float = 20.0
-    lag_s: float = 0.8
-    seed: int = 0
+# the same shape as the protobuf mix (plan_points: poses of the planned path)
+Ros2MixConfig = MixConfig
+_DEFAULT = MixConfig()
 
 
 def write_ros2_run(path: str | os.PathLike[str], *, accident: bool,
-                   cfg: Ros2MixConfig = Ros2MixConfig()) -> None:
+                   cfg: Ros2MixConfig = _DEFAULT) -> None:
     """Write one scripted ROS 2 run to ``path`` with mcap-ros2-support's ``Writer``."""
     from mcap_ros2.writer import Writer
 
@@ -226,7 +209,7 @@ def _message(topic: str, t: float, deviated: bool, cfg: Ros2MixConfig,
     raise ValueError(topic)
 
 
-def write_ros2_pair(directory: str | os.PathLike[str], cfg: Ros2MixConfig = Ros2MixConfig(),
+def write_ros2_pair(directory: str | os.PathLike[str], cfg: Ros2MixConfig = _DEFAULT,
                     name: str = "ros2") -> tuple[str, str]:
     """Write ``<name>_accident.mcap`` and ``<name>_reference.mcap``; returns both paths."""
     acc = os.path.join(directory, f"{name}_accident.mcap")
