@@ -41,6 +41,7 @@ from rocas.ads.perception import (
     TL_UNKNOWN,
     ObstacleFrame,
     PerceptionOutput,
+    no_lights,
     sim_light_to_tl,
 )
 from rocas.ads.prediction import (
@@ -141,9 +142,7 @@ class PerfectPerception:
         w = self.world
         n, nl = colors.shape
         if nl == 0:
-            z = np.zeros((n, 0))
-            return {"tl_detected": z.astype(bool), "tl_color": z.astype(np.int64),
-                    "tl_confidence": z, "tl_distance": z, "tl_selected": np.full(n, -1)}
+            return no_lights(n)
         _, s, _ = project_on_reference(w.road, ego.x, ego.y)
         ahead = w.light_stop_route_s[None, :] - (s + w.ego_dims[0] / 2)[:, None]  # (N, L)
         governs = np.isfinite(ahead) & (ahead > -LIGHT_PASSED_M)

@@ -104,6 +104,14 @@ class PerceptionOutput:
     tl_selected: np.ndarray
 
 
+
+def no_lights(n: int) -> dict[str, np.ndarray]:
+    """The traffic-light fields of a perception output for N variants in a world without lights."""
+    z = np.zeros((n, 0))
+    return {"tl_detected": z.astype(bool), "tl_color": z.astype(np.int64),
+            "tl_confidence": z, "tl_distance": z, "tl_selected": np.full(n, -1)}
+
+
 class Perception:
     """Sensors + detector + tracker + camera classifier + traffic-light recogniser."""
 
@@ -298,9 +306,7 @@ class Perception:
         w = self.world
         n, nl = colors.shape
         if nl == 0:
-            z = np.zeros((n, 0))
-            return {"tl_detected": z.astype(bool), "tl_color": z.astype(np.int64),
-                    "tl_confidence": z, "tl_distance": z, "tl_selected": np.full(n, -1)}
+            return no_lights(n)
         c, s = np.cos(eyaw)[:, None], np.sin(eyaw)[:, None]
         dx, dy = w.light_pos[:, 0] - ex[:, None], w.light_pos[:, 1] - ey[:, None]
         rx, ry = dx * c + dy * s, -dx * s + dy * c

@@ -39,29 +39,28 @@ def test_same_result_whatever_the_executor_and_workers():
         assert _summary(_search(pool)) == serial
 
 
-def test_resume_continues_to_the_same_result(tmp_path):
-    full = _summary(_search(SerialExecutor()))
-    ckpt = tmp_path / "search.pkl"
-
-    def stop_after_three(stats):
-        if stats.generation == 3:
+def _interrupt_at(generation, ckpt):
+    """A search stopped by Ctrl-C as generation ``generation`` is reported (before its
+    checkpoint is written)."""
+    def stop(stats):
+        if stats.generation == generation:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop_after_three)
+        _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop)
+
+
+def test_resume_continues_to_the_same_result(tmp_path):
+    full = _summary(_search(SerialExecutor()))
+    ckpt = tmp_path / "search.pkl"
+    _interrupt_at(3, ckpt)
     assert ckpt.exists()
     assert _summary(_search(SerialExecutor(), checkpoint=ckpt)) == full
 
 
 def test_a_resume_replays_from_the_checkpoint_without_evaluating_again(tmp_path):
     ckpt = tmp_path / "search.ckpt"
-
-    def stop_after_three(stats):
-        if stats.generation == 3:
-            raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        _search(SerialExecutor(), checkpoint=ckpt, on_generation=stop_after_three)
+    _interrupt_at(3, ckpt)
     saved = json.loads(ckpt.read_text())  # data, not a pickle
     assert saved["format"] == "rocas-search-checkpoint" and saved["generations"] == 2
     evaluated = []
@@ -98,11 +97,7 @@ def test_a_checkpoint_of_another_search_is_refused(tmp_path):
 
     ckpt = tmp_path / "search.ckpt"
 
-    def stop(stats):
-        raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        _search(SerialExecutor(), checkpoint=ckpt, on_generation=lambda s: s.generation == 2 and stop(s))
+    _interrupt_at(2, ckpt)
     with pytest.raises(InputError, match="another search"):
         _search(SerialExecutor(), checkpoint=ckpt, cfg=replace(CFG, seed=4))
 
