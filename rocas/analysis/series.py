@@ -73,6 +73,13 @@ class ChannelSeries:
     only_in: str | None = None
 
 
+def _score(a: DecodedMessage, b: DecodedMessage, tol: Tolerance) -> float:
+    """MDR of two messages of one channel; equal payloads (one schema) are equal trees."""
+    if a.payload and a.payload == b.payload:
+        return 0.0
+    return mdr(a.message, b.message, tol)
+
+
 @dataclass
 class _Pending:
     """A bin whose score waits for the next bin (which may take its leftovers)."""
@@ -103,11 +110,12 @@ class _Acc:
         self.pending = None
 
     def add_bin(
-        self, index: int, a_msgs: list[Any], b_msgs: list[Any], tol: Tolerance, adjacent: bool
+        self, index: int, a_msgs: list[DecodedMessage], b_msgs: list[DecodedMessage],
+        tol: Tolerance, adjacent: bool
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
         paired = min(len(a_msgs), len(b_msgs))
-        scores = [mdr(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
+        scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
         side = ACCIDENT if len(a_msgs) > paired else REFERENCE
         leftover = (a_msgs if side == ACCIDENT else b_msgs)[paired:]
         counts = (len(a_msgs), len(b_msgs))
@@ -119,7 +127,7 @@ class _Acc:
             k = min(len(p.leftover), len(leftover))
             for x, y in zip(p.leftover[:k], leftover[:k], strict=True):
                 a, b = (x, y) if p.leftover_side == ACCIDENT else (y, x)
-                p.scores.append(mdr(a, b, tol))
+                p.scores.append(_score(a, b, tol))
             p.leftover = p.leftover[k:]
             leftover = leftover[k:]
         self.finish_pending()
@@ -326,7 +334,7 @@ def _one_pass(
         b = int(head_bins[side])
         note_channel(side, msg.channel)
         slot = open_bins.setdefault(b, {}).setdefault(msg.channel.topic, ([], []))
-        slot[side].append((msg.log_time_ns, read[side], msg.message))
+        slot[side].append((msg.log_time_ns, read[side], msg))
         read[side] += 1
         t = msg.log_time_ns
         if t < latest[side]:

@@ -117,13 +117,18 @@ class RawMessage:
 
 @dataclass(frozen=True)
 class DecodedMessage:
-    """A message decoded to a protobuf object (or JSON value)."""
+    """A message decoded to a protobuf object (or JSON value, or ROS 2 message).
+
+    ``payload`` is the encoded bytes it was decoded from: two messages of one schema with
+    equal payloads are equal, which is cheaper to check on the bytes than on the objects.
+    """
 
     channel: ChannelInfo
     log_time_ns: int
     publish_time_ns: int
     sequence: int
     message: Any
+    payload: bytes = b""
 
 
 @dataclass
@@ -531,7 +536,7 @@ class Recording:
                     st.first_error = describe_error(exc)
                 continue
             st.decoded += 1
-            yield DecodedMessage(ch, log_time, publish_time, sequence, obj)
+            yield DecodedMessage(ch, log_time, publish_time, sequence, obj, data)
 
     def scan(self) -> Recording:
         """Read the file once to learn its channels, metadata and damage; returns self."""
