@@ -35,7 +35,7 @@ import itertools
 import json
 import math
 import operator
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -186,12 +186,14 @@ def compute_series(
     tolerance: Tolerance = EXACT,
     reorder_window_s: float = 1.0,
     adjacent_pairing: bool = True,
+    progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
     ``reorder_window_s`` is how far behind in log time a message may arrive (file order)
     and still be paired in one pass; a file that strays further costs another pass with a
-    window wide enough for it (module docstring).
+    window wide enough for it (module docstring). ``progress``, if given, is called now and
+    then with (bytes read, bytes in both files) of the current pass.
 
     Raises:
         RecordingError: a topic's schema differs between the two files, or a recording's log
@@ -206,7 +208,7 @@ def compute_series(
     while True:
         try:
             return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
-                             trust_summary)
+                             trust_summary, progress)
         except _Realign as bad:
             # the summary's start is later than a message: it does not describe these
             # messages, so the stream aligns itself (the pass then warns)
@@ -245,6 +247,7 @@ def _one_pass(
     window_s: float,
     adjacent_pairing: bool,
     trust_summary: list[bool],
+    progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
     """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short,
     :class:`_Realign` if a summary's start time is later than a message."""
@@ -273,6 +276,7 @@ def _one_pass(
     last = [-math.inf, -math.inf]
     max_span_ns = MAX_SPAN_S * 1e9
     recs = (accident, reference)
+    total_bytes = accident.size + reference.size
 
     def bin_of(side: int, msg: DecodedMessage) -> int:
         start = starts[side]
@@ -347,6 +351,8 @@ def _one_pass(
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
+            if progress is not None:
+                progress(accident.report.bytes_read + reference.report.bytes_read, total_bytes)
             low = min(head_bins)
             if low != math.inf:
                 flush(int(low) - window_bins)
