@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -223,6 +224,7 @@ def diff(
     change_points: ChangePointConfig | None = None,
     strict_bins: bool = False,
     allow_unrelated: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> DiffResult:
     """Diff two recordings channel by channel and find the initial deviating module.
 
@@ -240,6 +242,8 @@ def diff(
         strict_bins: pair messages only within their own bin (no adjacent-bin pairing).
         allow_unrelated: diff a pair that does not look like two runs of the same thing
             (:func:`check_pair`) with a warning instead of refusing it.
+        progress: called now and then with (bytes read, bytes in both files) while the
+            recordings are read.
 
     Raises:
         InputError: unreadable recordings or CMG file, schema mismatches, a pair that is not
@@ -265,7 +269,7 @@ def diff(
 
     res = compute_series(
         rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
-        reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins,
+        reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins, progress=progress,
     )
     empty = [
         (role, path, rec)

@@ -35,7 +35,7 @@ import itertools
 import json
 import math
 import operator
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -73,6 +73,13 @@ class ChannelSeries:
     only_in: str | None = None
 
 
+def _score(a: DecodedMessage, b: DecodedMessage, tol: Tolerance) -> float:
+    """MDR of two messages of one channel; equal payloads (one schema) are equal trees."""
+    if a.payload and a.payload == b.payload:
+        return 0.0
+    return mdr(a.message, b.message, tol)
+
+
 @dataclass
 class _Pending:
     """A bin whose score waits for the next bin (which may take its leftovers)."""
@@ -103,11 +110,12 @@ class _Acc:
         self.pending = None
 
     def add_bin(
-        self, index: int, a_msgs: list[Any], b_msgs: list[Any], tol: Tolerance, adjacent: bool
+        self, index: int, a_msgs: list[DecodedMessage], b_msgs: list[DecodedMessage],
+        tol: Tolerance, adjacent: bool
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
         paired = min(len(a_msgs), len(b_msgs))
-        scores = [mdr(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
+        scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
         side = ACCIDENT if len(a_msgs) > paired else REFERENCE
         leftover = (a_msgs if side == ACCIDENT else b_msgs)[paired:]
         counts = (len(a_msgs), len(b_msgs))
@@ -119,7 +127,7 @@ class _Acc:
             k = min(len(p.leftover), len(leftover))
             for x, y in zip(p.leftover[:k], leftover[:k], strict=True):
                 a, b = (x, y) if p.leftover_side == ACCIDENT else (y, x)
-                p.scores.append(mdr(a, b, tol))
+                p.scores.append(_score(a, b, tol))
             p.leftover = p.leftover[k:]
             leftover = leftover[k:]
         self.finish_pending()
@@ -178,12 +186,14 @@ def compute_series(
     tolerance: Tolerance = EXACT,
     reorder_window_s: float = 1.0,
     adjacent_pairing: bool = True,
+    progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
     ``reorder_window_s`` is how far behind in log time a message may arrive (file order)
     and still be paired in one pass; a file that strays further costs another pass with a
-    window wide enough for it (module docstring).
+    window wide enough for it (module docstring). ``progress``, if given, is called now and
+    then with (bytes read, bytes in both files) of the current pass.
 
     Raises:
         RecordingError: a topic's schema differs between the two files, or a recording's log
@@ -198,7 +208,7 @@ def compute_series(
     while True:
         try:
             return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
-                             trust_summary)
+                             trust_summary, progress)
         except _Realign as bad:
             # the summary's start is later than a message: it does not describe these
             # messages, so the stream aligns itself (the pass then warns)
@@ -237,6 +247,7 @@ def _one_pass(
     window_s: float,
     adjacent_pairing: bool,
     trust_summary: list[bool],
+    progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
     """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short,
     :class:`_Realign` if a summary's start time is later than a message."""
@@ -265,6 +276,7 @@ def _one_pass(
     last = [-math.inf, -math.inf]
     max_span_ns = MAX_SPAN_S * 1e9
     recs = (accident, reference)
+    total_bytes = accident.size + reference.size
 
     def bin_of(side: int, msg: DecodedMessage) -> int:
         start = starts[side]
@@ -326,7 +338,7 @@ def _one_pass(
         b = int(head_bins[side])
         note_channel(side, msg.channel)
         slot = open_bins.setdefault(b, {}).setdefault(msg.channel.topic, ([], []))
-        slot[side].append((msg.log_time_ns, read[side], msg.message))
+        slot[side].append((msg.log_time_ns, read[side], msg))
         read[side] += 1
         t = msg.log_time_ns
         if t < latest[side]:
@@ -339,6 +351,8 @@ def _one_pass(
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
+            if progress is not None:
+                progress(accident.report.bytes_read + reference.report.bytes_read, total_bytes)
             low = min(head_bins)
             if low != math.inf:
                 flush(int(low) - window_bins)

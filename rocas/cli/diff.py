@@ -133,19 +133,21 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
     if args.rrd:
         check_writable(args.rrd)
-    result = diff(
-        args.accident,
-        args.reference,
-        cmg=args.cmg,
-        control_channel_topic=args.control_channel,
-        bin_s=args.bin,
-        delta_s=args.delta,
-        atol=args.atol,
-        rtol=args.rtol,
-        change_points=change_point_config(args),
-        strict_bins=args.strict_bins,
-        allow_unrelated=args.allow_unrelated,
-    )
+    with env.progress("Reading both recordings", enabled=not args.json) as progress:
+        result = diff(
+            args.accident,
+            args.reference,
+            cmg=args.cmg,
+            control_channel_topic=args.control_channel,
+            bin_s=args.bin,
+            delta_s=args.delta,
+            atol=args.atol,
+            rtol=args.rtol,
+            change_points=change_point_config(args),
+            strict_bins=args.strict_bins,
+            allow_unrelated=args.allow_unrelated,
+            progress=progress.update if progress.enabled else None,
+        )
     for w in result.warnings:
         env.warn(w)
     if args.rrd:

@@ -54,7 +54,9 @@ class _Parser(argparse.ArgumentParser):
         raise _ArgumentError(f"{message} (see '{self.prog} --help')")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The command-line parser; with ``only``, the parser of that one command (the others'
+    modules, and what they import to declare their options, are then not imported)."""
     parser = _Parser(
         prog="rocas",
         description="Root cause analysis of autonomous-driving accidents from MCAP recordings.",
@@ -65,6 +67,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, module_name in COMMANDS.items():
+        if only is not None and name != only:
+            continue
         try:
             module = importlib.import_module(f"rocas.cli.{module_name}")
         except ModuleNotFoundError as exc:
@@ -76,6 +80,14 @@ def build_parser() -> argparse.ArgumentParser:
         _add_traceback(p)
         p.set_defaults(_run=module.run)
     return parser
+
+
+def _command_named(args: Sequence[str]) -> str | None:
+    """The command the arguments name, if they name one before anything else but --traceback."""
+    for arg in args:
+        if arg != "--traceback":
+            return arg if arg in COMMANDS else None
+    return None
 
 
 def _add_traceback(p: argparse.ArgumentParser) -> None:
@@ -95,7 +107,7 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
     if args_list == ["--version"]:  # answered before the commands (and numpy) are imported
         env.stdout.write(f"rocas {__version__}\n")
         return ExitStatus.SUCCESS
-    parser = build_parser()
+    parser = build_parser(_command_named(args_list))
     try:
         args = parser.parse_args(argv)
     except _ArgumentError as exc:

@@ -88,7 +88,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
         tmpdir = tempfile.TemporaryDirectory(prefix="rocas-view-")
         out = Path(tmpdir.name) / "view.rrd"
     try:
-        summary, warnings = write_rrd(source, out)
+        with env.progress(f"Writing the Rerun recording of {source.name}"):
+            summary, warnings = write_rrd(source, out)
         for line in warnings:
             env.warn(line)
         if keep is not None:

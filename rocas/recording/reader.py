@@ -37,7 +37,6 @@ from mcap.records import (
     Channel,
     Chunk,
     ChunkIndex,
-    Message,
     Metadata,
     Schema,
     Statistics,
@@ -118,13 +117,18 @@ class RawMessage:
 
 @dataclass(frozen=True)
 class DecodedMessage:
-    """A message decoded to a protobuf object (or JSON value)."""
+    """A message decoded to a protobuf object (or JSON value, or ROS 2 message).
+
+    ``payload`` is the encoded bytes it was decoded from: two messages of one schema with
+    equal payloads are equal, which is cheaper to check on the bytes than on the objects.
+    """
 
     channel: ChannelInfo
     log_time_ns: int
     publish_time_ns: int
     sequence: int
     message: Any
+    payload: bytes = b""
 
 
 @dataclass
@@ -283,7 +287,7 @@ class Recording:
 
     def _records(
         self, want_attachments: bool = False
-    ) -> Iterator[Message | Attachment]:
+    ) -> Iterator[_MessageRecord | Attachment]:
         """Yield message records (and attachments if asked) in file order, tolerating damage.
 
         A message pass resets :attr:`report`; an attachment pass reports into a scratch one.
@@ -301,7 +305,7 @@ class Recording:
             return
         yield from self._walk(want_attachments)
 
-    def _walk(self, want_attachments: bool) -> Iterator[Message | Attachment]:
+    def _walk(self, want_attachments: bool) -> Iterator[_MessageRecord | Attachment]:
         with open(self.path, "rb", buffering=1 << 20) as f:
             pos = len(MAGIC)
             while True:
@@ -427,16 +431,16 @@ class Recording:
             except Exception as exc:  # any parse failure inside one chunk: skip the chunk
                 raise _BadRecord(offset, describe_error(exc)) from exc
             for rec in records:
-                if isinstance(rec, Schema):
+                if type(rec) is tuple:
+                    yield rec
+                elif isinstance(rec, Schema):
                     self._register_schema(rec)
                 elif isinstance(rec, Channel):
                     self._register_channel(rec)
-                elif isinstance(rec, Message):
-                    yield rec
             return
         try:
             if opcode == Opcode.MESSAGE:
-                rec: Any = Message.read(stream, len(body))
+                rec: Any = _message_record(body, 0, len(body))
             elif opcode == Opcode.SCHEMA:
                 self._register_schema(Schema.read(stream))
                 return
@@ -471,52 +475,68 @@ class Recording:
         A pass that reaches the end of the file compares what it read with the summary
         section's statistics and chunk indexes (:meth:`_check_summary`).
         """
+        for ch, log_time, publish_time, sequence, data in self._attributed():
+            yield RawMessage(ch, log_time, publish_time, sequence, data)
+
+    def _attributed(self) -> Iterator[tuple[ChannelInfo, int, int, int, bytes]]:
+        """:meth:`messages` as tuples (channel, log time, publish time, sequence, payload)."""
         self.report = ReadReport(bytes_total=self.size)
         self._pass_chunks = []
         stats = self.report.channel_stats
         by_id: dict[int, int] = {}
         first, last = None, None
+        channels = self.channels
+        # channel id -> (its ChannelInfo, its stats) while the declaration stands
+        known: dict[int, tuple[ChannelInfo, ChannelStats]] = {}
         for rec in self._records():
-            assert isinstance(rec, Message)
-            by_id[rec.channel_id] = by_id.get(rec.channel_id, 0) + 1
-            t = rec.log_time
-            first = t if first is None or t < first else first
-            last = t if last is None or t > last else last
-            ch = self.channels.get(rec.channel_id)
+            channel_id, t, publish_time, sequence, data = rec  # type: ignore[misc]
+            by_id[channel_id] = by_id.get(channel_id, 0) + 1
+            if first is None:
+                first = last = t
+            elif t < first:
+                first = t
+            elif t > last:  # type: ignore[operator]
+                last = t
+            ch = channels.get(channel_id)
             if ch is None and not self._summary_channels_tried:
                 self._channels_from_summary()
-                ch = self.channels.get(rec.channel_id)
+                ch = channels.get(channel_id)
             if ch is None:
                 self.report.unknown_channel_messages += 1
                 continue
-            st = stats.get(ch.topic)
-            if st is None:
-                st = stats[ch.topic] = ChannelStats()
-            st.messages += 1
-            yield RawMessage(ch, rec.log_time, rec.publish_time, rec.sequence, rec.data)
+            entry = known.get(channel_id)
+            if entry is None or entry[0] is not ch:
+                st = stats.get(ch.topic)
+                if st is None:
+                    st = stats[ch.topic] = ChannelStats()
+                entry = known[channel_id] = (ch, st)
+            entry[1].messages += 1
+            yield ch, t, publish_time, sequence, data
         if self.report.complete:
             self._check_summary(by_id, first, last)
 
     def decoded(self, topics: set[str] | None = None) -> Iterator[DecodedMessage]:
         """Every message that decodes, in file order; failures are counted, not raised."""
-        for raw in self.messages():
-            ch = raw.channel
+        stats = None
+        for ch, log_time, publish_time, sequence, data in self._attributed():
             if topics is not None and ch.topic not in topics:
                 continue
-            st = self.report.channel_stats[ch.topic]
-            decode = self._decoder(ch)
+            if stats is not self.report.channel_stats:
+                stats = self.report.channel_stats
+            st = stats[ch.topic]
+            decode = self._decoders[ch.id] if ch.id in self._decoders else self._decoder(ch)
             if decode is None:
                 st.skipped_encoding += 1
                 continue
             try:
-                obj = decode(raw.data)
+                obj = decode(data)
             except Exception as exc:  # a foreign file can hold anything
                 st.undecodable += 1
                 if st.first_error is None:
                     st.first_error = describe_error(exc)
                 continue
             st.decoded += 1
-            yield DecodedMessage(ch, raw.log_time_ns, raw.publish_time_ns, raw.sequence, obj)
+            yield DecodedMessage(ch, log_time, publish_time, sequence, obj, data)
 
     def scan(self) -> Recording:
         """Read the file once to learn its channels, metadata and damage; returns self."""
@@ -797,7 +817,7 @@ def _chunk_header_ok(head: bytes, length: int) -> bool:
     return records_length == length - (_CHUNK_HEAD.size + clen + 8)
 
 
-def _inflate(chunk: Chunk, limit: int) -> bytes | bytearray:
+def _inflate(chunk: Chunk, limit: int) -> bytes:
     """The chunk's records, decompressed without trusting its size fields for allocation.
 
     ``limit`` is the largest uncompressed size accepted [bytes].
@@ -822,7 +842,7 @@ def _inflate(chunk: Chunk, limit: int) -> bytes | bytearray:
             if not piece:
                 break
             out += piece
-        data = out
+        data = bytes(out)
     elif chunk.compression == "lz4":
         import lz4.frame
 
@@ -839,27 +859,50 @@ def _inflate(chunk: Chunk, limit: int) -> bytes | bytearray:
     return data
 
 
-def _chunk_records(data: bytes | bytearray) -> list[Schema | Channel | Message]:
+#: A message record as the reader passes it on: (channel id, log time [ns], publish time [ns],
+#: sequence, payload). A tuple, not an object: a pass creates one per message.
+_MessageRecord = tuple[int, int, int, int, bytes]
+_MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
+
+
+def _message_record(data: bytes, start: int, length: int) -> _MessageRecord:
+    """The message record whose body is ``data[start : start + length]``."""
+    if length < _MESSAGE_HEAD.size:
+        raise ValueError(f"a message record of {length} bytes is shorter than its header")
+    channel_id, sequence, log_time, publish_time = _MESSAGE_HEAD.unpack_from(data, start)
+    return (channel_id, log_time, publish_time, sequence,
+            data[start + _MESSAGE_HEAD.size : start + length])
+
+
+def _chunk_records(data: bytes) -> list[Schema | Channel | _MessageRecord]:
     """Schema, channel and message records in a chunk's inflated data; raises on any damage."""
     view = memoryview(data)
-    out: list[Schema | Channel | Message] = []
+    out: list[Schema | Channel | _MessageRecord] = []
+    append = out.append
+    unpack_head = _RECORD_HEADER.unpack_from
+    unpack_message = _MESSAGE_HEAD.unpack_from
+    head_size, message_head = _RECORD_HEADER.size, _MESSAGE_HEAD.size
     pos, n = 0, len(data)
     while pos < n:
-        if n - pos < _RECORD_HEADER.size:
+        if n - pos < head_size:
             raise ValueError(f"a record header is cut off at byte {pos} of the chunk")
-        opcode, length = _RECORD_HEADER.unpack_from(data, pos)
-        start = pos + _RECORD_HEADER.size
-        if length > n - start:
+        opcode, length = unpack_head(data, pos)
+        start = pos + head_size
+        end = start + length
+        if end > n:
             raise ValueError(f"inner record at byte {pos} claims {length} bytes, "
                              f"{n - start} remain in the chunk")
-        stream = ReadDataStream(io.BytesIO(view[start : start + length]))
         if opcode == Opcode.MESSAGE:
-            out.append(Message.read(stream, length))
+            if length < message_head:
+                raise ValueError(f"a message record of {length} bytes is shorter than its "
+                                 "header")
+            channel_id, sequence, log_time, publish_time = unpack_message(data, start)
+            append((channel_id, log_time, publish_time, sequence, data[start + message_head:end]))
         elif opcode == Opcode.CHANNEL:
-            out.append(Channel.read(stream))
+            append(Channel.read(ReadDataStream(io.BytesIO(view[start:end]))))
         elif opcode == Opcode.SCHEMA:
-            out.append(Schema.read(stream))
-        pos = start + length
+            append(Schema.read(ReadDataStream(io.BytesIO(view[start:end]))))
+        pos = end
     return out
 
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 import ruptures
 
-from rocas.analysis.changepoints import ChangePointConfig, detect, median_filter
+from rocas.analysis.changepoints import ChangePointConfig, detect, median_filter, pelt_l2
 
 
 def _step(n=200, at=120, low=0.1, high=0.5, noise=0.02, seed=0):
@@ -58,14 +58,38 @@ def test_fixed_penalty_overrides_the_formula():
     assert detect(y, t, ChangePointConfig(penalty=0.5)).penalty == 0.5
 
 
-def test_kernel_linear_is_exact_pelt_l2():
-    """The fast solver computes the same segmentation as ruptures' Pelt with the l2 cost."""
+def test_pelt_l2_finds_ruptures_change_points_exactly():
+    """rocas's numpy PELT returns what ruptures' C solver (KernelCPD, linear kernel: exact PELT
+    for the l2 cost) returns, on noisy steps, MDR-like series full of ties, and rare spikes."""
+    rng = np.random.default_rng(0)
+    for trial in range(400):
+        n = int(rng.integers(2, 160))
+        kind = trial % 4
+        if kind == 0:
+            y = rng.normal(0, 0.05, n) + (np.arange(n) > rng.integers(0, n))
+        elif kind == 1:
+            y = rng.integers(0, 3, n) / 4.0
+        elif kind == 2:
+            y = np.round(rng.random(n), 1)
+        else:
+            y = np.where(rng.random(n) < 0.1, 1.0, 0.0)
+        pen = float(rng.choice([1e-6, 1e-3, 0.05, 0.5, 3.0]))
+        min_size = int(rng.choice([1, 1, 2, 3]))
+        if n < 2 * min_size:
+            continue
+        expected = ruptures.KernelCPD(kernel="linear", min_size=min_size, jump=1).fit(
+            y.reshape(-1, 1)).predict(pen=pen)
+        assert pelt_l2(y, pen, min_size) == expected, (trial, n, pen, min_size)
+
+
+def test_pelt_l2_is_the_l2_optimum():
+    """Against ruptures' Pelt with the l2 cost (the segmentation the paper's PELT defines)."""
     for seed in range(3):
         y, _ = _step(n=120, at=70, noise=0.05, seed=seed)
-        y = y.reshape(-1, 1)
-        fast = ruptures.KernelCPD(kernel="linear", min_size=2, jump=1).fit(y).predict(pen=0.05)
-        slow = ruptures.Pelt(model="l2", min_size=2, jump=1).fit(y).predict(pen=0.05)
-        assert fast == slow
+        slow = ruptures.Pelt(model="l2", min_size=2, jump=1).fit(y.reshape(-1, 1)).predict(pen=0.05)
+        assert pelt_l2(y, 0.05, 2) == slow
+    assert pelt_l2(np.zeros(0), 1.0) == []
+    assert pelt_l2(np.array([0.0, 0.0, 1.0, 1.0]), 0.01) == [2, 4]
 
 
 def test_median_filter_removes_impulses_and_keeps_steps():

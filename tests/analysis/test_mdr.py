@@ -198,3 +198,38 @@ def test_ros2_float_leaves_take_the_tolerance(ros2_msg):
     assert mdr(a, b, Tolerance(atol=1e-6)) == 0.0
     nan = make(cov=(float("nan"), 0.0, 0.0, 1.0))
     assert mdr(nan, make(cov=(float("nan"), 0.0, 0.0, 1.0))) == 0.0
+
+
+def _cloud_class():
+    """A message with a long repeated float field (a range scan) and a scalar."""
+    fdp = descriptor_pb2.FileDescriptorProto(name="cloud_test.proto", package="t")
+    m = fdp.message_type.add(name="Cloud")
+    m.field.add(name="ranges", number=1, type=descriptor_pb2.FieldDescriptorProto.TYPE_FLOAT,
+                label=descriptor_pb2.FieldDescriptorProto.LABEL_REPEATED)
+    m.field.add(name="ring", number=2, type=descriptor_pb2.FieldDescriptorProto.TYPE_INT32)
+    pool = descriptor_pool.DescriptorPool()
+    pool.Add(fdp)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName("t.Cloud"))
+
+
+@pytest.mark.parametrize("tol", [Tolerance(), Tolerance(atol=0.01), Tolerance(rtol=0.001)])
+def test_long_float_fields_follow_the_leaf_rule(tol):
+    """A scan long enough to be compared as an array scores what the element-wise rule says:
+    equal or both NaN is the same leaf, an infinity only equals itself, tolerances apply."""
+    cls = _cloud_class()
+    rng = np.random.default_rng(3)
+    base = rng.uniform(1, 80, 500).astype(np.float32)
+    other = (base + rng.normal(0, 0.005, 500) * (rng.random(500) < 0.3)).astype(np.float32)
+    base[:4] = [np.nan, np.inf, -np.inf, 5.0]
+    other[:4] = [np.nan, np.inf, np.inf, np.nan]
+    a, b = cls(ranges=base.tolist(), ring=1), cls(ranges=other.tolist(), ring=1)
+    x, y = np.asarray(a.ranges, dtype=np.float64), np.asarray(b.ranges, dtype=np.float64)
+    differ = sum(
+        not (p == q or (math.isnan(p) and math.isnan(q)))
+        and (tol.exact or math.isinf(p) or math.isinf(q) or math.isnan(p) or math.isnan(q)
+             or abs(p - q) > tol.atol + tol.rtol * abs(q))
+        for p, q in zip(x.tolist(), y.tolist(), strict=True)
+    )
+    assert differ > 3
+    assert mdr(a, b, tol) == (differ / 500) / 2
+    assert mdr(a, cls(ranges=base.tolist(), ring=1), tol) == 0.0

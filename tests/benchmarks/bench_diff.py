@@ -1,44 +1,105 @@
 """Benchmark of `rocas diff` (prints figures; not a test).
 
-Generates accident/reference pairs of the built-in channel mix at realistic rates and
-sizes (rocas.recording.synthetic: 100 Hz pose/chassis/control, 10 Hz perception/prediction/
-planning with 30 obstacles and 80-point forecasts, ~1 MB/s of serialized messages), then:
+1. Whole processes on the shipped demo pair (recordings/demo): ``rocas diff A B --json``
+   against a plain read + decode of both files (:data:`BASELINE`: mcap + mcap-protobuf-support,
+   one DecoderFactory per file), each run ``--repeat`` times alternately; min and median of
+   wall and CPU time (user + system, which a shared machine disturbs less), the ratios, and
+   each child's peak RSS (target: diff <= 1.5x the baseline).
+2. Generated pairs of the built-in channel mix at realistic rates and sizes
+   (rocas.recording.synthetic: 100 Hz pose/chassis/control, 10 Hz perception/prediction/
+   planning with 30 obstacles and 80-point forecasts, ~1 MB/s of serialized messages): the
+   same whole-process comparison on the 30 s pair, and peak memory for 1x and 10x the length
+   (target: flat, since both files are streamed).
+3. The change-point solver: rocas's numpy PELT (``pelt_l2``) against
+   ``ruptures.KernelCPD(kernel="linear")`` (the same change points, checked) and
+   ``ruptures.Pelt(model="l2")`` on noisy step series of 300 and 1200 bins.
 
-- diff wall time and messages per second on the 30 s pair;
-- the same run's baseline: merely reading and decoding both files with mcap +
-  mcap-protobuf-support (one DecoderFactory per file), and the ratio (target <= 3x);
-- peak memory (max RSS of a fresh process running the diff) for 1x and 10x the length
-  (target: flat, since both files are streamed);
-- the change-point solver: ``ruptures.KernelCPD(kernel="linear")`` against
-  ``ruptures.Pelt(model="l2")`` (the same segmentation) on noisy step series of 300 and 1200
-  bins, and the speed-up.
-
-Usage: python tests/benchmarks/bench_diff.py [--long-factor 10]
+Usage: python tests/benchmarks/bench_diff.py [--repeat 5] [--long-factor 10]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 from mcap.reader import make_reader
-from mcap_protobuf.decoder import DecoderFactory
 
-from rocas.analysis import diff
 from rocas.recording.synthetic import MixConfig, write_mix_pair
 
-PEAK_SCRIPT = """
-import resource, sys, time
-from rocas.analysis import diff
-t = time.perf_counter()
-r = diff(sys.argv[1], sys.argv[2])
-print(time.perf_counter() - t, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-      r.deviating_module)
+DEMO = Path(__file__).resolve().parents[2] / "recordings" / "demo"
+
+#: The baseline: read and decode every protobuf message of the files named on the command
+#: line (a small JSON status channel of bench_large's pair is left out, as mcap has no decoder
+#: for it).
+BASELINE = """
+import sys
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+n = 0
+for path in sys.argv[1:]:
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        topics = [c.topic for c in reader.get_summary().channels.values()
+                  if c.message_encoding == "protobuf"]
+        for _schema, _channel, _message, _decoded in reader.iter_decoded_messages(topics=topics):
+            n += 1
+print(n)
 """
+
+
+def run_child(argv: list[str]) -> tuple[float, float, float, str]:
+    """Run one child process to its end: (wall [s], CPU user + system [s], peak RSS [MB],
+    stdout). Raises if it fails. The child's own resource usage comes from ``wait4``."""
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        t = time.perf_counter()
+        proc = subprocess.Popen(argv, stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t
+        proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
+        out.seek(0)
+        err.seek(0)
+        if proc.returncode != 0:
+            raise SystemExit(f"{' '.join(argv[:5])} ... failed ({proc.returncode}):\n"
+                             f"{err.read().decode()[-2000:]}")
+        return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, out.read().decode()
+
+
+def compare_whole_processes(accident: str, reference: str, repeat: int, label: str,
+                            target: float) -> str:
+    """Print whole-process figures of ``rocas diff`` against :data:`BASELINE` on one pair and
+    return the diff's JSON output (from its last run). The two alternate, so that a change of
+    load on a shared machine touches both."""
+    diff_argv = [sys.executable, "-m", "rocas", "diff", accident, reference, "--json"]
+    base_argv = [sys.executable, "-c", BASELINE, accident, reference]
+    runs: dict[str, list[tuple[float, float, float]]] = {"diff": [], "base": []}
+    answer = ""
+    for _ in range(repeat):
+        *figures, _ = run_child(base_argv)
+        runs["base"].append(tuple(figures))  # type: ignore[arg-type]
+        *figures, answer = run_child(diff_argv)
+        runs["diff"].append(tuple(figures))  # type: ignore[arg-type]
+    print(f"{label}: whole processes, {repeat} runs each")
+    rows = {}
+    for name, title in (("base", "read+decode (mcap-protobuf-support)"), ("diff", "rocas diff")):
+        wall = [r[0] for r in runs[name]]
+        cpu = [r[1] for r in runs[name]]
+        rss = max(r[2] for r in runs[name])
+        rows[name] = (min(wall), statistics.median(wall), min(cpu), statistics.median(cpu), rss)
+        print(f"  {title:38s} wall min {min(wall):6.2f} s  median {statistics.median(wall):6.2f} s"
+              f" | CPU min {min(cpu):6.2f} s  median {statistics.median(cpu):6.2f} s"
+              f" | peak RSS {rss:5.0f} MB")
+    b, d = rows["base"], rows["diff"]
+    print(f"  ratio diff / read+decode: wall min {d[0] / b[0]:.2f}x, median {d[1] / b[1]:.2f}x; "
+          f"CPU min {d[2] / b[2]:.2f}x, median {d[3] / b[3]:.2f}x  (target <= {target:g}x); "
+          f"peak RSS {d[4] / b[4]:.2f}x")
+    return answer
 
 
 def raw_bytes(path: str) -> int:
@@ -46,48 +107,50 @@ def raw_bytes(path: str) -> int:
         return sum(len(m.data) for _, _, m in make_reader(f).iter_messages())
 
 
-def read_and_decode(path: str) -> int:
-    n = 0
-    with open(path, "rb") as f:
-        for _ in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
-            n += 1
-    return n
-
-
 def peak(acc: str, ref: str) -> tuple[float, float, str]:
-    out = subprocess.run([sys.executable, "-c", PEAK_SCRIPT, acc, ref], check=True,
-                         capture_output=True, text=True).stdout.split()
-    return float(out[0]), float(out[1]), out[2]
+    """(wall [s], peak RSS [MB], deviating module) of one whole-process ``rocas diff``."""
+    wall, _cpu, rss, out = run_child([sys.executable, "-m", "rocas", "diff", acc, ref, "--json"])
+    return wall, rss, json.loads(out)["deviating_module"]
 
 
 def pelt_speedup(repeat: int) -> None:
     import numpy as np
     import ruptures
 
+    from rocas.analysis.changepoints import pelt_l2
+
     for n in (300, 1200):
         rng = np.random.default_rng(0)
         y = (np.where(np.arange(n) >= n * 2 // 3, 1.0, 0.0) + 0.05 * rng.standard_normal(n))
-        y = y.reshape(-1, 1)
         times = {}
-        for name, algo in (("KernelCPD linear", ruptures.KernelCPD(kernel="linear", min_size=2,
-                                                                      jump=1)),
-                           ("Pelt l2", ruptures.Pelt(model="l2", min_size=2, jump=1))):
+        for name, solve in (
+            ("rocas pelt_l2", lambda y=y: pelt_l2(y, 0.05, 2)),
+            ("KernelCPD linear", lambda y=y: ruptures.KernelCPD(kernel="linear", min_size=2, jump=1)
+             .fit(y.reshape(-1, 1)).predict(pen=0.05)),
+            ("Pelt l2", lambda y=y: ruptures.Pelt(model="l2", min_size=2, jump=1)
+             .fit(y.reshape(-1, 1)).predict(pen=0.05)),
+        ):
             best = float("inf")
             for _ in range(repeat):
                 t = time.perf_counter()
-                ends = algo.fit(y).predict(pen=0.05)
+                ends = solve()
                 best = min(best, time.perf_counter() - t)
             times[name] = (best, ends)
-        (tk, ek), (tp, ep) = times["KernelCPD linear"], times["Pelt l2"]
-        print(f"change points, {n} bins: KernelCPD linear {1000 * tk:.2f} ms, Pelt l2 "
-              f"{1000 * tp:.1f} ms ({tp / tk:,.0f}x), same result: {ek == ep}")
+        (tr, er), (tk, ek), (tp, ep) = (times[k] for k in ("rocas pelt_l2", "KernelCPD linear",
+                                                           "Pelt l2"))
+        print(f"change points, {n} bins (min of {repeat}): rocas pelt_l2 {1000 * tr:.2f} ms, "
+              f"KernelCPD linear {1000 * tk:.2f} ms, Pelt l2 {1000 * tp:.1f} ms; "
+              f"same result: {er == ek == ep}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--long-factor", type=int, default=10)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
+    acc, ref = str(DEMO / "a01_scripted_accident.mcap"), str(DEMO / "a01_scripted_reference.mcap")
+    out = compare_whole_processes(acc, ref, args.repeat, "demo pair (recordings/demo)", 1.5)
+    print(f"  deviating module: {json.loads(out)['deviating_module']}")
     with tempfile.TemporaryDirectory() as tmp:
         cfg = MixConfig(duration_s=30.0)
         t = time.perf_counter()
@@ -95,23 +158,9 @@ def main() -> None:
         gen_s = time.perf_counter() - t
         size = (os.path.getsize(acc) + os.path.getsize(ref)) / 1e6
         payload = (raw_bytes(acc) + raw_bytes(ref)) / 1e6
-        print(f"30 s pair: {size:.1f} MB on disk (zstd), {payload:.1f} MB of serialized "
+        print(f"30 s synthetic pair: {size:.1f} MB on disk (zstd), {payload:.1f} MB of serialized "
               f"messages; generated in {gen_s:.1f} s")
-
-        base, full = [], []
-        for _ in range(args.repeat):
-            t = time.perf_counter()
-            n = read_and_decode(acc) + read_and_decode(ref)
-            base.append(time.perf_counter() - t)
-            t = time.perf_counter()
-            r = diff(acc, ref)
-            full.append(time.perf_counter() - t)
-        b, d = min(base), min(full)
-        print(f"read+decode both (mcap-protobuf-support): {b:.2f} s  ({n / b:,.0f} msg/s)")
-        print(f"rocas diff:                             {d:.2f} s  ({n / d:,.0f} msg/s, "
-              f"{payload / d:.1f} MB/s)  -> {r.deviating_module}")
-        print(f"ratio diff / read+decode: {d / b:.2f}x  (target <= 3x)")
-
+        compare_whole_processes(acc, ref, args.repeat, "30 s synthetic pair", 1.5)
         s1, m1, dev1 = peak(acc, ref)
         print(f"peak RSS  1x ({cfg.duration_s:.0f} s): {m1:.0f} MB  (diff {s1:.1f} s, {dev1})")
         long_cfg = MixConfig(duration_s=cfg.duration_s * args.long_factor,

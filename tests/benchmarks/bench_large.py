@@ -3,23 +3,25 @@
 Writes an accident/reference pair of the acme stack (tests/foreign_stack.py) to a temporary
 directory, streaming to disk, with a realistic lidar channel (16,384 ranges per scan at
 20 Hz, centimetre range noise independent in the two runs) that makes up most of the bytes, until each
-file reaches the target size. Then, each in its own child process:
+file reaches the target size. Then, as whole processes, alternately ``--repeat`` times
+(bench_diff.compare_whole_processes):
 
 1. ``rocas diff ACCIDENT REFERENCE --json``;
-2. a baseline that merely reads and decodes both files with ``mcap_protobuf``.
+2. a baseline that merely reads and decodes both files with mcap + mcap-protobuf-support;
 
-Peak RSS is the child's own ``ru_maxrss``. The files are deleted at the end.
+and prints min and median of wall and CPU time, the ratios (target: diff <= 3x) and each
+child's peak RSS (its own ``ru_maxrss`` from ``wait4``). The files are deleted at the end
+unless ``--keep DIR`` names a directory to write them to (or reuse them from).
 
 Usage::
 
-    python tests/benchmarks/bench_large.py [--gb 1.0] [--dir /tmp]
+    python tests/benchmarks/bench_large.py [--gb 1.0] [--dir /tmp] [--repeat 2] [--keep DIR]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 import time
@@ -30,7 +32,9 @@ from mcap.writer import CompressionType, Writer
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
 
+from bench_diff import compare_whole_processes  # noqa: E402
 from foreign_stack import (  # noqa: E402
     CONTROL,
     RATES,
@@ -112,75 +116,32 @@ def write_big_run(path: Path, *, accident: bool, target_bytes: int | None, durat
     return tick * step
 
 
-_CHILD_DIFF = """
-import io, json, resource, sys
-from rocas.cli.console import Env
-from rocas.cli.main import main
-out, err = io.StringIO(), io.StringIO()
-code = main(["diff", sys.argv[1], sys.argv[2], "--json"], env=Env(stdout=out, stderr=err))
-res = json.loads(out.getvalue()) if code == 0 else {}
-print(json.dumps({"code": int(code), "stderr": err.getvalue()[-2000:],
-                  "deviating_module": res.get("deviating_module"),
-                  "messages_read": res.get("messages_read"),
-                  "maxrss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
-"""
-
-_CHILD_BASELINE = """
-import json, resource, sys
-from mcap.reader import make_reader
-from mcap_protobuf.decoder import DecoderFactory
-n = 0
-for path in sys.argv[1:]:
-    with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        topics = [c.topic for c in reader.get_summary().channels.values()
-                  if c.message_encoding == "protobuf"]
-        for _schema, _channel, _message, _decoded in reader.iter_decoded_messages(topics=topics):
-            n += 1
-print(json.dumps({"code": 0, "decoded": n,
-                  "maxrss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
-"""
-
-
-def run_child(code: str, *args: str) -> tuple[dict, float]:
-    t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
-                          check=False)
-    wall = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise SystemExit(f"child failed ({proc.returncode}):\n{proc.stderr[-3000:]}")
-    return json.loads(proc.stdout.strip().splitlines()[-1]), wall
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--gb", type=float, default=1.0, help="size of each recording [GB]")
     ap.add_argument("--dir", default=None, help="where to write the temporary recordings")
+    ap.add_argument("--keep", default=None, metavar="DIR",
+                    help="write the pair to DIR and keep it (reused when it is there)")
+    ap.add_argument("--repeat", type=int, default=2, help="runs of each process (default 2)")
     args = ap.parse_args()
     target = int(args.gb * 1e9)
     with tempfile.TemporaryDirectory(prefix="rocas-bench-large-", dir=args.dir) as tmp:
-        acc, ref = Path(tmp) / "accident.mcap", Path(tmp) / "reference.mcap"
-        t0 = time.perf_counter()
-        # the reference decides the duration; the accident then covers the same time
-        duration = write_big_run(ref, accident=False, target_bytes=target, duration_s=None)
-        write_big_run(acc, accident=True, target_bytes=None, duration_s=duration)
-        gen_s = time.perf_counter() - t0
+        where = Path(args.keep) if args.keep else Path(tmp)
+        where.mkdir(parents=True, exist_ok=True)
+        acc, ref = where / "accident.mcap", where / "reference.mcap"
+        if not (acc.exists() and ref.exists()):
+            t0 = time.perf_counter()
+            # the reference decides the duration; the accident then covers the same time
+            duration = write_big_run(ref, accident=False, target_bytes=target, duration_s=None)
+            write_big_run(acc, accident=True, target_bytes=None, duration_s=duration)
+            print(f"written in {time.perf_counter() - t0:.0f} s")
         sizes = [acc.stat().st_size, ref.stat().st_size]
-        total_mb = sum(sizes) / 1e6
-        print(f"recordings: accident {sizes[0] / 1e6:.0f} MB, reference {sizes[1] / 1e6:.0f} MB, "
-              f"{duration:.0f} s of driving each, written in {gen_s:.0f} s")
-        res, wall = run_child(_CHILD_DIFF, str(acc), str(ref))
-        if res["code"] != 0:
-            print(f"rocas diff failed with exit {res['code']}: {res['stderr']}")
-        print(f"rocas diff: exit {res['code']}, {wall:.1f} s wall, {total_mb / wall:.1f} MB/s, "
-              f"peak RSS {res['maxrss_kb'] / 1024:.0f} MB, deviating module "
-              f"{res['deviating_module']}, messages read {res['messages_read']}")
-        base, bwall = run_child(_CHILD_BASELINE, str(acc), str(ref))
-        print(f"baseline (mcap_protobuf read + decode, both files): {bwall:.1f} s wall, "
-              f"{total_mb / bwall:.1f} MB/s, peak RSS {base['maxrss_kb'] / 1024:.0f} MB, "
-              f"{base['decoded']} protobuf messages")
-        ok = res["code"] == 0 and res["maxrss_kb"] / 1024 < 500
-        print(f"peak memory under 500 MB: {'yes' if ok else 'NO'}")
+        print(f"recordings: accident {sizes[0] / 1e6:.0f} MB, reference {sizes[1] / 1e6:.0f} MB")
+        out = compare_whole_processes(str(acc), str(ref), args.repeat,
+                                      "lidar-heavy pair (bench_large)", 3.0)
+        res = json.loads(out)
+        print(f"  deviating module {res['deviating_module']}, messages read "
+              f"{res['messages_read']}")
 
 
 if __name__ == "__main__":

@@ -29,3 +29,14 @@ def test_version_imports_nothing_heavy():
 
 def test_diff_options_parse_without_the_analysis_libraries():
     assert _top(_imported("diff", "--help"), NOT_FOR_OPTIONS) == set()
+
+
+def test_a_diff_imports_only_what_it_uses():
+    """A whole diff needs neither ruptures (scipy.stats) nor the other commands' libraries."""
+    from pathlib import Path
+
+    demo = Path(__file__).resolve().parents[2] / "recordings" / "demo"
+    names = _imported("diff", str(demo / "a01_scripted_accident.mcap"),
+                      str(demo / "a01_scripted_reference.mcap"), "--json")
+    assert "rocas.analysis.diff" in names
+    assert _top(names, NOT_FOR_OPTIONS + ("rich", "rocas.search", "rocas.sim")) == set()
