@@ -122,7 +122,8 @@ def _scene_view(name: str, ex: Execution | None = None) -> Any:
     bounds = scene_bounds(ex)
     return rrb.Spatial2DView(
         origin=f"executions/{name}",
-        contents=["+ $origin/world/**", "+ $origin/ego/**", "+ $origin/actors/**", "+ $origin/accident"],
+        contents=["+ $origin/world/**", "+ $origin/ego/**", "+ $origin/actors/**", "+ $origin/accident",
+                  "+ $origin/labels"],
         name=f"Scene: {name}",
         background=BACKGROUND_RGB,
         visual_bounds=None if bounds is None else rrb.VisualBounds2D(x_range=bounds[0], y_range=bounds[1]),

@@ -60,6 +60,10 @@ def unavailable_reason() -> str | None:
     return None
 
 
+#: How long the viewer's start-up notifications (software rasterizer, port) stay up [s].
+NOTIFICATIONS_S = 7.0
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -72,6 +76,7 @@ class HeadlessViewer:
     def __init__(self, proc: subprocess.Popen[bytes], client: Any) -> None:
         self.proc = proc
         self.client = client
+        self.started = time.monotonic()
 
     def open(self, rrd: str | os.PathLike[str], timeout_s: float = 60.0) -> None:
         """Open ``rrd`` (replacing what was open) and wait until it has loaded."""
@@ -81,7 +86,7 @@ class HeadlessViewer:
         deadline = time.monotonic() + timeout_s
         while True:
             state = self.client.get_state()
-            if not state.loading and state.recordings and all(r.timelines for r in state.recordings):
+            if not state.loading and state.recordings:
                 return
             if time.monotonic() > deadline:
                 raise RocasError(f"{rrd}: the headless viewer did not finish loading in {timeout_s:g} s")
@@ -108,7 +113,8 @@ class HeadlessViewer:
         """
         if time_s is not None:
             self.client.set_time(timeline, duration=float(time_s), play_state="paused")
-        time.sleep(settle_s)
+        # the viewer's start-up notifications fade after a few seconds
+        time.sleep(max(settle_s, NOTIFICATIONS_S - (time.monotonic() - self.started)))
         views = self.views()
         view_id = None
         if view is not None:
