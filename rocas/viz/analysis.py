@@ -122,7 +122,8 @@ def _scene_view(name: str, ex: Execution | None = None) -> Any:
     bounds = scene_bounds(ex)
     return rrb.Spatial2DView(
         origin=f"executions/{name}",
-        contents=["+ $origin/world/**", "+ $origin/ego/**", "+ $origin/actors/**", "+ $origin/accident"],
+        contents=["+ $origin/world/**", "+ $origin/ego/**", "+ $origin/actors/**", "+ $origin/accident",
+                  "+ $origin/labels"],
         name=f"Scene: {name}",
         background=BACKGROUND_RGB,
         visual_bounds=None if bounds is None else rrb.VisualBounds2D(x_range=bounds[0], y_range=bounds[1]),
@@ -164,21 +165,30 @@ def _signal_views(names: Sequence[str], with_brake: bool) -> list[Any]:
     return views
 
 
+#: The window the default layout is designed for [points] (the README picture's size).
+WINDOW_PT = (1600, 900)
+
+
 def analysis_blueprint(
     executions: Sequence[str] = EXECUTIONS,
     *,
     diff: bool = True,
+    diff_result: DiffResult | None = None,
     searches: Sequence[str] = (),
     verdict: bool = True,
     brake: bool = True,
     focus: Execution | None = None,
     validation: bool = False,
 ) -> Any:
-    """The default layout: scene + signals left; MDR, CMG and verdict (+ searches) right.
+    """The default layout, three columns: scene over signals; the CMG after Algorithm 1 (tabs:
+    change points, removed edges); the MDR plot over the verdict (tabs: searches, validation).
 
+    ``diff_result``: frames the MDR plot on its change points and the CMG view on its graph.
     ``focus``: the execution whose accident the scene views frame (default: the whole map).
     """
     import rerun.blueprint as rrb
+
+    from rocas.viz.diff import cmg_view, mdr_view
 
     scenes = [_scene_view(n, focus) for n in executions]
     left = rrb.Vertical(
@@ -186,42 +196,54 @@ def analysis_blueprint(
         rrb.Tabs(*_signal_views(executions, brake), active_tab=0),
         row_shares=[3, 2],
     )
+    columns: list[Any] = [left]
+    shares = [5.0]
     right_parts: list[Any] = []
     if diff:
-        right_parts.append(rrb.TimeSeriesView(origin="diff/mdr", name="MDR per channel"))
-        right_parts.append(
-            rrb.Tabs(
-                rrb.GraphView(origin="diff/cmg", name="CMG after Algorithm 1"),
-                rrb.GraphView(origin="diff/cmg_removed", name="Removed edges"),
-                rrb.TextLogView(origin="diff/events", name="Change points"),
-                active_tab=0,
-            )
-        )
+        columns.append(rrb.Tabs(
+            cmg_view(diff_result),
+            rrb.TextLogView(origin="diff/events", name="Change points"),
+            rrb.TextDocumentView(origin="diff/removed_edges", name="Removed edges"),
+            active_tab=0,
+        ))
+        shares.append(3.0)
+        right_parts.append(mdr_view(diff_result, panel_height_pt=0.45 * (WINDOW_PT[1] - 80)))
     bottom: list[Any] = []
     if verdict:
         bottom.append(rrb.TextDocumentView(origin=VERDICT_ENTITY, name="Verdict"))
     for phase in searches:
-        bottom.append(
-            rrb.TimeSeriesView(
-                origin=f"search/{phase}",
-                contents=[
-                    f"+ search/{phase}/objectives/**",
-                    f"+ search/{phase}/best/**",
-                    f"+ search/{phase}/feasible",
-                ],
-                name=f"{phase.capitalize()} search",
-            )
-        )
-        bottom.append(
-            rrb.TextDocumentView(origin=f"search/{phase}/summary", name=f"{phase.capitalize()} table")
-        )
+        bottom.extend(search_views(phase))
     if validation:
         bottom.append(rrb.BarChartView(origin=VALIDATION_ENTITY, name="Validation"))
         bottom.append(rrb.TextDocumentView(origin=f"{VALIDATION_ENTITY}/summary", name="Validation table"))
     if bottom:
         right_parts.append(rrb.Tabs(*bottom, active_tab=0) if len(bottom) > 1 else bottom[0])
-    layout = rrb.Horizontal(left, rrb.Vertical(*right_parts), column_shares=[3, 2]) if right_parts else left
-    return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE), collapse_panels=True)
+    if right_parts:
+        columns.append(rrb.Vertical(*right_parts, row_shares=[45, 55][: len(right_parts)])
+                       if len(right_parts) > 1 else right_parts[0])
+        shares.append(3.0)
+    layout = rrb.Horizontal(*columns, column_shares=shares) if len(columns) > 1 else left
+    return rrb.Blueprint(layout, rrb.TimePanel(timeline=TIMELINE, state="collapsed"),
+                         collapse_panels=True)
+
+
+def search_views(phase: str) -> list[Any]:
+    """The views of one search: what it tried and where it ended (static, any timeline), its
+    progress per generation (``generation`` timeline), and its table."""
+    import rerun.blueprint as rrb
+
+    title = phase.capitalize()
+    return [
+        rrb.Spatial2DView(origin=f"search/{phase}/tried", name=f"{title} search: tried",
+                          background=(24, 24, 28)),
+        rrb.TimeSeriesView(
+            origin=f"search/{phase}",
+            contents=[f"+ search/{phase}/objectives/**", f"+ search/{phase}/best/**",
+                      f"+ search/{phase}/feasible"],
+            name=f"{title} search: per generation",
+        ),
+        rrb.TextDocumentView(origin=f"search/{phase}/summary", name=f"{title} table"),
+    ]
 
 
 #: The timeline of Rerun's own MCAP importer, which ``rocas view RECORDING.mcap`` uses to show
@@ -330,6 +352,7 @@ def write_analysis_rrd(
     bp = analysis_blueprint(
         [n for n, _ in executions],
         diff=diff_result is not None,
+        diff_result=diff_result,
         searches=[p for p, g in searches.items() if g],
         verdict=verdict_md is not None,
         brake=any(_has_brake(e) for _, e in executions),
@@ -352,6 +375,23 @@ def _read_json(path: Path) -> Any:
         return json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise InputError(f"{path}: unreadable JSON ({exc})") from None
+
+
+def search_outcome(phase: str, data: Mapping[str, Any]) -> str | None:
+    """Where a search of a run directory ended, in words (from ``physical.json``/``cyber.json``)."""
+    if phase == "physical":
+        trig = data.get("triggering_entity") or {}
+        if not trig:
+            return "no triggering entity found"
+        props = ", ".join(f"{p['name']} {p['original']} -> {p['mutated']}"
+                          for p in trig.get("properties", []))
+        return f"{trig.get('entity')}" + (f" ({props})" if props else "")
+    if phase == "cyber":
+        mis = data.get("misconfiguration") or []
+        if not mis:
+            return "no fix found"
+        return ", ".join(f"{m['parameter']} {m['original']:.4g} -> {m['mutated']:.4g}" for m in mis)
+    return None
 
 
 def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -377,6 +417,7 @@ def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
         if (d / f"{phase}.json").is_file():
             data = _read_json(d / f"{phase}.json")
             out["searches"][phase] = generations_from_json(data.get("generations", []))
+            out.setdefault("outcomes", {})[phase] = search_outcome(phase, data)
             trig = data.get("triggering_entity") or {}
             if phase == "physical" and trig:
                 out["highlight"] = [e for e in (trig.get("entities") or [trig.get("entity")]) if e]
@@ -426,13 +467,13 @@ def _log_contents(rec: Any, c: dict[str, Any]) -> None:
             c[name] = log_execution(
                 rec, name, c[name], highlight=ids if name in ("accident", "reference") else ()
             )
-    result = _diff_for(c)
+    result = c["diff_result"] if "diff_result" in c else _diff_for(c)
     if result is not None:
         log_diff(rec, result, "diff", timelines=("time", TIMELINE))
     elif c.get("diff"):
         _log_diff_json(rec, c["diff"])
     for phase, gens in c["searches"].items():
-        log_search(rec, phase, gens)
+        log_search(rec, phase, gens, outcome=c.get("outcomes", {}).get(phase))
     log_validation(rec, c.get("validation"))
     if "verdict_md" in c:
         log_verdict(rec, c["verdict_md"])
@@ -468,9 +509,11 @@ def write_run_dir_rrd(path: str | os.PathLike[str], run_dir: str | os.PathLike[s
     names = [n for n in EXECUTIONS if n in c]
     for n in names:
         c[n] = load_execution(c[n])
+    c["diff_result"] = _diff_for(c)
     bp = analysis_blueprint(
         names,
         diff="reference" in c or "diff" in c,
+        diff_result=c["diff_result"],
         searches=[p for p, g in c["searches"].items() if g],
         verdict="verdict_md" in c,
         brake=any(_has_brake(c[n]) for n in names),

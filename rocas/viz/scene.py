@@ -887,7 +887,8 @@ def log_scene(
                     radii=[0.35],
                     colors=[ACCIDENT_COLOR],
                     labels=[f"{label}: {what} at {t:.2f} s"],
-                    show_labels=[True],
+                    # with obstacles, <prefix>/labels places this label clear of the boxes
+                    show_labels=[not ex.obstacles],
                 ),
             )
             rec.log(f"{prefix}/accident", rr.LineStrips2D.from_fields(draw_order=12.0), static=True)
@@ -914,7 +915,8 @@ def _log_ego(rec: Any, ex: Execution, prefix: str) -> None:
     _over_time(
         rec, f"{prefix}/ego/box",
         rr.LineStrips2D.from_fields(
-            radii=0.12, colors=[(255, 255, 255)], labels=["ego"], show_labels=True, draw_order=11.0
+            radii=0.12, colors=[(255, 255, 255)], labels=["ego"], show_labels=not ex.obstacles,
+            draw_order=11.0
         ),
         ex.ego_t, rr.LineStrips2D.columns(strips=list(box_outline(ex.ego_xy, ex.ego_heading, size))),
     )
@@ -963,10 +965,13 @@ def _log_actors(
     outline = [_contrast(c) for c in fill]
     _over_time(
         rec, f"{prefix}/actors/boxes",
-        rr.LineStrips2D.from_fields(radii=0.1, show_labels=True, draw_order=9.1), times,
+        rr.LineStrips2D.from_fields(radii=0.1, show_labels=False, draw_order=9.1), times,
         rr.LineStrips2D.columns(strips=list(box_outline(xy, heading, size)), colors=outline,
                                 labels=labels).partition(counts),
     )
+    mutated = [i in names and names[i] in highlight for i in ids]
+    _log_labels(rec, ex, prefix, [f"mutated: {t}" if m else t for t, m in zip(labels, mutated, strict=True)],
+                xy, size, fill, mutated, counts)
     radii = np.maximum(size[:, 1] / 2 - 0.08, 0.1)
     _over_time(
         rec, f"{prefix}/actors/bodies", rr.LineStrips2D.from_fields(draw_order=9.0), times,
@@ -1005,15 +1010,59 @@ def _log_actors(
             mask = np.asarray(hi)
             _over_time(
                 rec, f"{prefix}/actors/highlight",
-                rr.LineStrips2D.from_fields(
-                    radii=0.35, colors=[HIGHLIGHT_COLOR], show_labels=True, draw_order=9.2
-                ),
+                rr.LineStrips2D.from_fields(radii=0.35, colors=[HIGHLIGHT_COLOR], draw_order=9.2),
                 times,
                 rr.LineStrips2D.columns(
                     strips=list(box_outline(xy[mask], heading[mask], size[mask] + 1.2)),
-                    labels=[f"mutated: {names[i]}" for i, h in zip(ids, hi, strict=True) if h],
                 ).partition(hcounts),
             )
+
+
+def _log_labels(rec: Any, ex: Execution, prefix: str, texts: list[str], xy: np.ndarray,
+                size: np.ndarray, fill: list[tuple[int, ...]], mutated: list[bool], counts: list[int]
+                ) -> None:
+    """``<prefix>/labels``: per obstacle frame, the labels of the ego, the obstacles and the
+    accident (from its time on), each placed clear of the boxes and of each other
+    (:func:`rocas.viz.labels.place_labels`); the mutated actor's and the accident's first."""
+    import rerun as rr
+
+    from rocas.viz.labels import LabelItem, label_anchors, place_labels
+
+    acc = ex.accident()
+    acc_item = None
+    if acc is not None:
+        pos = acc[2] or (ex.ego_at(acc[0]) or (None, None))[:2]
+        if pos[0] is not None:
+            acc_item = (acc[0], LabelItem(f"{acc[1]} at {acc[0]:.2f} s",
+                                          (float(pos[0]), float(pos[1])), 4.0))
+    ego_r = float(np.hypot(EGO_LENGTH_M, EGO_WIDTH_M)) / 2
+    pos_rows, text_rows, color_rows, n_rows = [], [], [], []
+    start = 0
+    for f, n in zip(ex.obstacles, counts, strict=True):
+        items: list[tuple[LabelItem, tuple[int, ...]]] = []
+        if acc_item is not None and f.t >= acc_item[0]:
+            items.append((acc_item[1], ACCIDENT_COLOR))
+        order = sorted(range(start, start + n), key=lambda k: not mutated[k])
+        for k in order:
+            r = float(np.hypot(*size[k])) / 2
+            item = LabelItem(texts[k], (float(xy[k, 0]), float(xy[k, 1])), r)
+            items.append((item, HIGHLIGHT_COLOR if mutated[k] else fill[k]))
+        ego = ex.ego_at(f.t)
+        if ego is not None:
+            items.insert(1 if items and items[0][1] == ACCIDENT_COLOR else 0,
+                         (LabelItem("ego", (ego[0], ego[1]), ego_r), (255, 255, 255)))
+        spots = label_anchors([it for it, _ in items], place_labels([it for it, _ in items]))
+        pos_rows.append(np.asarray(spots, dtype=np.float64).reshape(-1, 2))
+        text_rows += [it.text for it, _ in items]
+        color_rows += [(*c[:3], 255) for _, c in items]
+        n_rows.append(len(items))
+        start += n
+    if sum(n_rows):
+        _over_time(rec, f"{prefix}/labels",
+                   rr.Points2D.from_fields(radii=0.05, show_labels=True, draw_order=13.0),
+                   [f.t for f in ex.obstacles],
+                   rr.Points2D.columns(positions=np.concatenate(pos_rows), labels=text_rows,
+                                       colors=color_rows).partition(n_rows))
 
 
 def _log_paths(rec: Any, ex: Execution, prefix: str) -> None:

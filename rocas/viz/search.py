@@ -11,6 +11,10 @@ Entities, under ``search/<phase>`` (phase: ``physical`` or ``cyber``):
   feasible, red otherwise.
 - ``best_candidate``: a text log line per generation naming the best candidate so far.
 - ``summary``: a static markdown table of the generations (readable on any timeline).
+- ``tried``: static (any timeline): one dot per simulation in the order the search ran them
+  (x) at its constraint value (y; at or below the dashed line the accident is avoided), green
+  when it avoided the accident, red otherwise, and a ring with a label where the search ended
+  (``outcome``).
 """
 
 from __future__ import annotations
@@ -59,6 +63,7 @@ def log_search(
     best_labels: list[str] | None = None,
     *,
     objective_names: Sequence[str] | None = None,
+    outcome: str | None = None,
 ) -> None:
     """Log one search's progress under ``search/<phase>`` on the ``generation`` timeline.
 
@@ -69,6 +74,7 @@ def log_search(
         best_labels: a description of the best candidate so far, one per generation.
         objective_names: names of the objectives (default: :data:`OBJECTIVE_NAMES` of the
             phase, else ``f1``, ``f2``, ...).
+        outcome: where the search ended, in words (default: the last of ``best_labels``).
     """
     import rerun as rr
 
@@ -165,11 +171,58 @@ def log_search(
             indexes=index(gens[:k]),
             columns=rr.TextLog.columns(text=[str(s) for s in best_labels[:k]]),
         )
+    log_tried(rec, base, generations, outcome or (best_labels[-1] if best_labels else None))
     rec.log(
         f"{base}/summary",
         rr.TextDocument(summary_markdown(phase, generations, names, best_labels), media_type="text/markdown"),
         static=True,
     )
+
+
+#: Size of the ``tried`` plot [view units]: simulations across, constraint values up.
+TRIED_W, TRIED_H = 160.0, 70.0
+
+
+def log_tried(rec: Any, base: str, generations: list[GenerationStats], outcome: str | None) -> None:
+    """Log ``<base>/tried``: every simulation of the search as a dot (see the module doc)."""
+    import rerun as rr
+
+    cons = [np.asarray(g.constraints, dtype=np.float64).reshape(-1) for g in generations]
+    gen_of = np.concatenate([np.full(len(c), g.generation) for c, g in zip(cons, generations, strict=True)]
+                            ) if cons else np.zeros(0)
+    c = np.concatenate(cons) if cons else np.zeros(0)
+    ok = np.isfinite(c)
+    if not ok.any():
+        return
+    c, gen_of = c[ok], gen_of[ok]
+    n = len(c)
+    lo, hi = min(float(c.min()), 0.0), max(float(c.max()), 0.0)
+    span = max(hi - lo, 1e-9)
+    x = (np.arange(n) + 0.5) / n * TRIED_W
+    y = -(c - lo) / span * TRIED_H  # y grows downwards in a 2D view: larger constraint higher up
+    y0 = -(0.0 - lo) / span * TRIED_H
+    feasible = c <= 0
+    colors = [FEASIBLE_RGB if f else INFEASIBLE_RGB for f in feasible]
+    labels = [f"simulation {i + 1} (generation {int(gi)}): constraint {ci:.3g}, "
+              f"{'avoids' if f else 'keeps'} the accident"
+              for i, (gi, ci, f) in enumerate(zip(gen_of, c, feasible, strict=True))]
+    rec.log(f"{base}/tried/runs", rr.Points2D(np.stack([x, y], axis=1), colors=colors, radii=1.2,
+                                               labels=labels, show_labels=False), static=True)
+    dash = [np.array([[a, y0], [min(a + 3.0, TRIED_W), y0]]) for a in np.arange(0.0, TRIED_W, 6.0)]
+    rec.log(f"{base}/tried/avoided_below", rr.LineStrips2D(dash, colors=[(200, 200, 200)], radii=0.3),
+            static=True)
+    axes = np.array([[0.0, -TRIED_H - 6.0], [0.0, 4.0], [TRIED_W + 4.0, 4.0]])
+    rec.log(f"{base}/tried/axes", rr.LineStrips2D([axes], colors=[(120, 120, 120)], radii=0.3), static=True)
+    notes = [(TRIED_W / 2, 12.0, f"{n} simulations in the order run →"),
+             (TRIED_W * 0.16, y0 + 7.0, "below: accident avoided"),
+             (TRIED_W * 0.16, -TRIED_H - 6.0, f"{int(feasible.sum())} of {n} avoid it")]
+    rec.log(f"{base}/tried/notes",
+            rr.Points2D([[a, b] for a, b, _ in notes], radii=0.01, colors=[(220, 220, 220)],
+                        labels=[t for *_, t in notes], show_labels=True), static=True)
+    if outcome:
+        rec.log(f"{base}/tried/ended",
+                rr.Points2D([[TRIED_W * 0.72, -TRIED_H - 6.0]], radii=0.01, colors=[(255, 215, 0)],
+                            labels=[f"ended: {outcome}"], show_labels=True), static=True)
 
 
 def summary_markdown(

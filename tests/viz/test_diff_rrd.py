@@ -30,7 +30,10 @@ def test_rrd_has_series_change_points_graph_report_and_blueprint(result, tmp_pat
     assert entities["/diff/events"].rows == sum(len(c.change_points.times_s) for c in result.channels)
     graph = entities["/diff/cmg"]
     assert graph.static_rows == 1 and any("GraphEdges" in col for col in graph.columns)
-    assert entities["/diff/cmg_removed"].static_rows == 1
+    assert "GraphNodes:positions" in " ".join(graph.columns)  # laid out in code
+    assert entities["/diff/cmg/marks"].static_rows == 1  # the walk's and removed edges' dots
+    assert entities["/diff/removed_edges"].static_rows == 1
+    assert entities["/diff/t_star"].rows == sum(1 for c in result.channels if c.change_point_s is not None)
     assert entities["/diff/report"].static_rows == 1
 
 

@@ -1,72 +1,53 @@
-"""A headless screenshot of the default layout (needs the rerun CLI and a Vulkan driver,
-e.g. Debian's mesa-vulkan-drivers for the lavapipe software rasterizer)."""
+"""Headless screenshots of the default layouts at 1600x900 (need the rerun viewer and a Vulkan
+driver, e.g. Debian's mesa-vulkan-drivers for the lavapipe software rasterizer)."""
 
 import dataclasses
-import glob
-import os
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
+from foreign_stack import make_pair
 
+from rocas.analysis import diff
 from rocas.scenarios.loader import load_example
 from rocas.sim.engine import simulate
 from rocas.viz.analysis import write_analysis_rrd
+from rocas.viz.diff import ORANGE, RED, write_diff_rrd
 from rocas.viz.scene import BACKGROUND_RGB
+from rocas.viz.screenshot import screenshot_rrd, unavailable_reason
 
-ICD_DIRS = ("/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d", "/usr/local/share/vulkan/icd.d")
-
-
-def _skip_reason() -> str | None:
-    if shutil.which("rerun") is None:
-        return "the rerun CLI is not on PATH"
-    if (
-        not any(glob.glob(os.path.join(d, "*.json")) for d in ICD_DIRS)
-        and "VK_ICD_FILENAMES" not in os.environ
-    ):
-        return "no Vulkan driver (apt-get install -y mesa-vulkan-drivers)"
-    return None
+pytestmark = [pytest.mark.slow,
+              pytest.mark.skipif(unavailable_reason() is not None, reason=unavailable_reason() or "")]
 
 
-@pytest.mark.skipif(_skip_reason() is not None, reason=_skip_reason() or "")
-def test_headless_screenshot_of_the_default_layout_is_not_blank(tmp_path):
+def _image(path):
     Image = pytest.importorskip("PIL.Image")
+    return np.asarray(Image.open(path).convert("RGB")).astype(np.int16)
 
+
+def _share(img, rgb, tol=40):
+    return (np.abs(img - np.array(rgb)).sum(axis=2) < tol).mean()
+
+
+def test_analysis_layout_at_1600x900(tmp_path):
     path = tmp_path / "accident.mcap"
     simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=8.0), output=path)
     rrd = tmp_path / "a.rrd"
     write_analysis_rrd(rrd, accident=path, verdict_md="# Verdict\n\nscreenshot test\n")
-    png = tmp_path / "shot.png"
-    runtime = tmp_path / "xdg"
-    runtime.mkdir(mode=0o700)
-    env = {**os.environ, "XDG_RUNTIME_DIR": str(runtime)}
-    # the file goes through stdin: the viewer has it all before the first frame is drawn
-    with open(rrd, "rb") as stdin:
-        proc = subprocess.run(
-            [
-                "rerun",
-                "--headless",
-                "--window-size",
-                "1280x720",
-                "--screenshot-to",
-                str(png),
-                "--port",
-                "9877",
-                "-",
-            ],
-            stdin=stdin,
-            capture_output=True,
-            text=True,
-            timeout=120,
-            env=env,
-        )
-    if proc.returncode != 0 and ("No graphics adapter" in proc.stderr or "adapter" in proc.stderr.lower()):
-        pytest.skip("the viewer found no graphics adapter")
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    img = np.asarray(Image.open(png).convert("RGB")).astype(np.int16)
-    assert img.shape[0] >= 700 and img.std() > 10
-    assert len(np.unique(img.reshape(-1, 3), axis=0)) > 200
-    # the scene view is drawn: a good share of pixels has its background colour
-    scene = (np.abs(img - np.array(BACKGROUND_RGB)).sum(axis=2) < 12).mean()
-    assert scene > 0.05
+    shot, = screenshot_rrd(rrd, tmp_path / "shot.png", time_s=6.0)
+    assert not any(shot.views.values()), shot.views  # every view drew without a problem
+    img = _image(shot.png)
+    assert img.shape[:2] == (900, 1600) and img.std() > 10
+    assert _share(img, BACKGROUND_RGB, 12) > 0.05  # the scene view is drawn
+
+
+def test_third_party_diff_shows_the_walk_in_the_cmg_view(tmp_path):
+    pair = make_pair(tmp_path, deviating="forecaster")
+    result = diff(pair.accident, pair.reference)
+    assert result.deviating_module == "forecaster"
+    rrd = tmp_path / "d.rrd"
+    write_diff_rrd(result, rrd)
+    whole, cmg = screenshot_rrd(rrd, tmp_path / "diff.png", views=["CMG after Algorithm 1"])
+    assert not any(whole.views.values()), whole.views
+    img = _image(cmg.png)
+    # the walk's dots and labels in orange, the deviating module in red: both on screen
+    assert _share(img, ORANGE) > 0.0005 and _share(img, RED) > 0.00003
