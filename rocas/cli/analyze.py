@@ -174,6 +174,10 @@ class _Progress:
             self._p.stop_task(task)
 
     def __call__(self, phase: str, info: dict[str, Any]) -> None:
+        if phase == "answer":  # the answer before phase V checks it: said at once, above the bars
+            self._p.console.print(f"[bold]found[/bold]: {info['module']} misconfigured, {info['fix']} "
+                                  "(validating the fix)", highlight=False)
+            return
         if "planned" in info:  # a search's planned simulations, sent as it starts
             info = dict(info)
             self._totals[phase] = info.pop("planned")

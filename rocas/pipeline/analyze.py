@@ -70,6 +70,13 @@ def analyze(
             ex.close()
 
 
+def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:
+    """The misconfiguration found, in words, before phase V checks it ("name original -> fix")."""
+    space = run.cyber_space(module)
+    return ", ".join(f"{name} {float(space.variable(name).original):.4g} -> {value:.4g}"  # type: ignore[arg-type]
+                     for name, value in sorted(fix.items()))
+
+
 def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dict[str, Any]:
     run.progress("replay", {})
     phase_replay(run, scenario, recording)
@@ -87,6 +94,9 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
     cyber = phase_cyber(run, diff["deviating_module"])
     if "fix" not in cyber:
         return write_report(run.out, build_report(run.state, run.accident, "no_configuration_fix"))
+    if not run.done("validation"):
+        run.progress("answer", {"module": diff["deviating_module"], "fix": answer_text(run, cyber["fix"],
+                                                                                   diff["deviating_module"])})
     phase_validation(run, cyber["fix"], diff["deviating_module"])
     return write_report(run.out, build_report(run.state, run.accident, "misconfiguration"))
 

@@ -56,7 +56,7 @@ class AnalyzeConfig:
     scope: str = "module"
     executor: str = "local"
     workers: int | None = None
-    batch_size: int = 32
+    batch_size: int = 256
     delta_s: float = 3.0
     validation_variants: int = 200
     k_suspicion: float = 10.0
@@ -96,7 +96,7 @@ class AnalyzeConfig:
                              f"choose one of: {', '.join(executor_names())}")
         if self.workers is not None:
             whole(self.workers, 1, "--workers", 1)
-        whole(self.batch_size, 1, "batch_size", 32)
+        whole(self.batch_size, 1, "batch_size", 256)
         real(self.delta_s, "--delta", 3.0)
         whole(self.validation_variants, 0, "--validation", 200)
         real(self.k_suspicion, "k_suspicion", 10.0, positive=True)

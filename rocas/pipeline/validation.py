@@ -46,11 +46,12 @@ STRONGER_FRACTIONS = (0.125, 0.25, 0.5, 0.75, 1.0)
 ROBUST_TOLERANCE = 0.05
 
 
-def validation_simulations(variants: int) -> int:
+def validation_simulations(variants: int, stronger: int = len(STRONGER_FRACTIONS)) -> int:
     """Simulations of phase V at most: the variants with the original and the minimal fix, then
-    each stronger value on the accident itself and on every variant (none without variants;
-    fewer when stronger values coincide, see stronger_fixes)."""
-    return 2 * variants + len(STRONGER_FRACTIONS) * (variants + 1) if variants else 0
+    each of ``stronger`` values on the accident itself and on every variant (none without
+    variants; fewer when stronger values coincide, see stronger_fixes, or the sweep stops early,
+    see phase_validation)."""
+    return 2 * variants + stronger * (variants + 1) if variants else 0
 
 
 def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
@@ -78,19 +79,26 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
 
 #: simulations of phase V per slice, in batches (of AnalyzeConfig.batch_size) per worker: after
 #: each slice the progress bar advances and the finished simulations are checkpointed
-VALIDATION_SLICE_BATCHES = 4
+VALIDATION_SLICE_BATCHES = 1
 
 
 def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dict[str, Any]:
     """The paper's regression test: K perturbed variants with the original configuration and
     with the minimal fix. Then the robust value: the fix moved further the same way
     (STRONGER_FRACTIONS), each stronger value run on the accident (it must still avoid it and
-    keep the ego's earlier trajectory, h1) and on the same variants.
+    keep the ego's earlier trajectory, h1) and, closest first, on the same variants.
+
+    The sweep stops as soon as its answer is settled, which gives the same robust value as
+    running every stronger value (see :func:`sweep_settled`): a stronger value that fails on
+    the accident is not a candidate and is not run on the variants, and once one value is
+    certain to be the robust one (or the minimal fix certain to be robust enough) the values
+    beyond it are left out. The report lists them with ``"skipped"`` and the reason.
 
     The simulations run in slices (VALIDATION_SLICE_BATCHES batches per worker); after each, the
-    progress callback gets the running count (``evaluations``) and what the finished ones found
-    (accident or not, and h1 where the sweep needs it) is written to ``validation.ckpt``, so a
-    resumed run goes on after the last finished slice. Results do not depend on the slicing."""
+    progress callback gets the running count (``evaluations``) and the most simulations the
+    phase can still take (``simulations``), and what the finished ones found (accident or not,
+    and h1 where the sweep needs it) is written to ``validation.ckpt``, so a resumed run goes on
+    after the last finished slice. Results do not depend on the slicing."""
     if run.done("validation"):
         return run.state["done"]["validation"]
     t0 = time.perf_counter()
@@ -98,60 +106,129 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     variants = perturbed_variants(run.scenario, run.cfg.validation_variants, run.cfg.seed)
     n = len(variants)
     stronger = stronger_fixes(fix, run.cyber_space(module)) if n else []
-    configs = [params_tuple(fix)] + [params_tuple(values) for _, values in stronger]
-    tasks = [VariantTask(v, (), v.seed) for v in variants] + \
-        [VariantTask(v, configs[0], v.seed) for v in variants]
-    for params in configs[1:]:
-        tasks.append(VariantTask(run.scenario, params, run.scenario.seed))
-        tasks += [VariantTask(v, params, v.seed) for v in variants]
-    on_accident = [2 * n + k * (n + 1) for k in range(len(stronger))]  # each stronger value's first
-    horizon = run.h1_horizon
-    ckpt = run.out / "validation.ckpt"
-    found = _validation_checkpoint(ckpt, fix, len(tasks))
-    step = run.cfg.batch_size * VALIDATION_SLICE_BATCHES * max(1, getattr(run.executor, "workers", 1))
-    while True:
-        start = len(found["accident"])
-        run.progress("validation", {"variants": n, "simulations": len(tasks), "evaluations": start})
-        if start == len(tasks):
-            break
-        for i, r in enumerate(evaluate(run.executor, tasks[start:start + step], run.cfg.batch_size),
-                              start):
-            found["accident"].append(is_accident(r.outcome))
-            if i in on_accident:
-                found["h1_m2"][str(i)] = ego_dissimilarity(run.original.ego_xy, r.ego_xy, horizon)
-        write_text_atomic(ckpt, json.dumps(found))
-    accident = found["accident"]
+    configs = [params_tuple(values) for _, values in stronger]
+    found = _validation_checkpoint(run.out / "validation.ckpt", fix, n)
+    sims = _Simulations(run, found, planned=validation_simulations(n, len(stronger)))
 
-    def rate(first: int) -> float:
-        return sum(not a for a in accident[first:first + n]) / n
+    # the stronger values on the accident itself, then the original and the minimal fix on the variants
+    on_accident = sims.run([VariantTask(run.scenario, c, run.scenario.seed) for c in configs],
+                           h1_of=range(len(configs)))
+    h1 = [found["h1_m2"][str(i)] for i in range(len(configs))]
+    valid = [not acc and h <= run.cfg.h1_limit_m2 for acc, h in zip(on_accident, h1, strict=True)]
+    sims.planned -= n * valid.count(False)
+    runs = sims.run([VariantTask(v, (), v.seed) for v in variants]
+                    + [VariantTask(v, params_tuple(fix), v.seed) for v in variants])
+    ok_orig, ok_fixed = (_rate(runs[:n]), _rate(runs[n:])) if n else (None, None)
 
-    ok_orig, ok_fixed = (rate(0), rate(n)) if n else (None, None)
+    rates: list[float | None] = [None] * len(configs)
+    skipped: list[str | None] = [None if ok else "it does not avoid the accident or it changes "
+                                 "the ego's trajectory before it" for ok in valid]
+    for k, params in enumerate(configs):
+        if not valid[k]:
+            continue
+        if sweep_settled(ok_fixed, [r for r in rates[:k] if r is not None], more=True):
+            skipped[k] = "the robust value was settled by the closer values"
+            sims.planned -= n
+            continue
+        rates[k] = _rate(sims.run([VariantTask(v, params, v.seed) for v in variants]))
+    sims.report()
     sweep = []
-    for (f, values), first in zip(stronger, on_accident, strict=True):
-        sweep.append({"fraction": f, "fix": values, "avoids_accident": not accident[first],
-                      "h1_m2": round(found["h1_m2"][str(first)], 6), "success_rate": rate(first + 1)})
+    for k, (f, values) in enumerate(stronger):
+        entry: dict[str, Any] = {"fraction": f, "fix": values, "avoids_accident": not on_accident[k],
+                                 "h1_m2": round(h1[k], 6), "success_rate": rates[k]}
+        if skipped[k]:
+            entry["skipped"] = skipped[k]
+        sweep.append(entry)
     result = {"variants": n, "success_rate_original": ok_orig, "success_rate_fixed": ok_fixed,
               "fix_makes_it_worse": bool(n and ok_fixed < ok_orig),  # type: ignore[operator]
-              "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2)}
+              "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2),
+              "simulations": sims.done, "simulations_without_stopping": validation_simulations(
+                  n, len(stronger))}
     write_text_atomic(run.out / "validation.json", json.dumps(result, indent=1))
-    run.finish("validation", result, time.perf_counter() - t0, len(tasks))
-    ckpt.unlink(missing_ok=True)
+    run.finish("validation", result, time.perf_counter() - t0, sims.done)
+    (run.out / "validation.ckpt").unlink(missing_ok=True)
     return result
 
 
-def _validation_checkpoint(path: Path, fix: Mapping[str, float], simulations: int) -> dict[str, Any]:
+def _rate(accidents: list[bool]) -> float:
+    """The share of runs without an accident."""
+    return sum(not a for a in accidents) / len(accidents)
+
+
+def _qualifies(rate: float, best: float, minimal: bool) -> bool:
+    """Whether a success rate is within ROBUST_TOLERANCE of the best: for the minimal fix,
+    strictly (a stronger value that is exactly the tolerance better is preferred)."""
+    return rate > best - ROBUST_TOLERANCE if minimal else rate >= best - ROBUST_TOLERANCE
+
+
+def sweep_settled(fixed_rate: float | None, rates: list[float], more: bool) -> bool:
+    """Whether the robust value is already decided by the minimal fix's success rate and the
+    ``rates`` of the valid stronger values so far (closest first), whatever the rates of the
+    ``more`` values still to come: some value (the minimal fix counts as the first) is within the
+    tolerance even of a perfect rate, and every closer one falls short even of the best seen so
+    far. The best can only grow, so these stay true: :func:`_robust` of the whole sweep picks
+    the same value."""
+    if fixed_rate is None or not more:
+        return True
+    seen = [fixed_rate] + rates
+    best = max(seen)
+    for i, r in enumerate(seen):
+        if _qualifies(r, 1.0, minimal=i == 0):
+            return True
+        if _qualifies(r, best, minimal=i == 0):
+            return False  # this one's fate depends on the values to come
+    return False
+
+
+class _Simulations:
+    """Runs phase V's simulations in slices, checkpointed, resuming from what a checkpoint
+    holds (results in task order, so a resumed run takes the saved prefix and goes on)."""
+
+    def __init__(self, run: Run, found: dict[str, Any], planned: int) -> None:
+        self.run_, self.found, self.planned, self.done = run, found, planned, 0
+        self._said: tuple[int, int] | None = None
+
+    def run(self, tasks: list[VariantTask], h1_of: range = range(0)) -> list[bool]:
+        run, found, first = self.run_, self.found, self.done
+        step = run.cfg.batch_size * VALIDATION_SLICE_BATCHES * max(1, getattr(run.executor, "workers", 1))
+        while self.done < first + len(tasks):
+            if len(found["accident"]) > self.done:  # finished before an interruption
+                self.done = min(len(found["accident"]), first + len(tasks))
+                continue
+            self.report()
+            chunk = tasks[self.done - first:self.done - first + step]
+            for i, r in enumerate(evaluate(run.executor, chunk, run.cfg.batch_size), self.done):
+                found["accident"].append(is_accident(r.outcome))
+                if i - first in h1_of:
+                    assert run.original is not None
+                    found["h1_m2"][str(i)] = ego_dissimilarity(run.original.ego_xy, r.ego_xy,
+                                                               run.h1_horizon)
+            self.done += len(chunk)
+            write_text_atomic(run.out / "validation.ckpt", json.dumps(found))
+        return found["accident"][first:first + len(tasks)]
+
+    def report(self) -> None:
+        """Tell the progress callback how far the phase is (when that changed)."""
+        if self._said == (self.planned, self.done):
+            return
+        self._said = (self.planned, self.done)
+        self.run_.progress("validation", {"variants": self.found["variants"],
+                                          "simulations": self.planned, "evaluations": self.done})
+
+
+def _validation_checkpoint(path: Path, fix: Mapping[str, float], variants: int) -> dict[str, Any]:
     """What the finished slices of phase V found, in task order (``accident``: one flag per
     simulation; ``h1_m2``: task index -> h1 of the stronger values' runs on the accident); empty
-    when there is no checkpoint, or one of another fix or size (then it is started afresh)."""
-    fresh = {"fix": dict(fix), "simulations": simulations, "accident": [], "h1_m2": {}}
+    when there is no checkpoint, or one of another fix, size or format (then it is started
+    afresh: the order of the tasks follows from the results, so a prefix is all there is)."""
+    fresh = {"format": 2, "fix": dict(fix), "variants": variants, "accident": [], "h1_m2": {}}
     if not path.exists():
         return fresh
     try:
         saved = json.loads(path.read_text())
     except (OSError, ValueError):
         return fresh
-    if not isinstance(saved, dict) or saved.get("fix") != fresh["fix"] \
-            or saved.get("simulations") != simulations:
+    if not isinstance(saved, dict) or any(saved.get(k) != fresh[k] for k in ("format", "fix", "variants")):
         return fresh
     return saved
 
@@ -160,13 +237,14 @@ def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: flo
             ) -> dict[str, Any] | None:
     """The value closest to the minimal fix whose success rate is within ROBUST_TOLERANCE of the
     best rate among it and the stronger values that still avoid the accident and keep the ego's
-    earlier trajectory; None when that is the minimal fix itself (no stronger value avoids
-    clearly more variants)."""
+    earlier trajectory (and were run on the variants); None when that is the minimal fix itself
+    (no stronger value avoids clearly more variants)."""
     if fixed_rate is None:
         return None
-    valid = [s for s in sweep if s["avoids_accident"] and s["h1_m2"] <= h1_limit]
+    valid = [s for s in sweep if s["avoids_accident"] and s["h1_m2"] <= h1_limit
+             and s["success_rate"] is not None]
     best = max([fixed_rate] + [s["success_rate"] for s in valid])
-    if best < fixed_rate + ROBUST_TOLERANCE:
+    if _qualifies(fixed_rate, best, minimal=True):
         return None
-    pick = next(s for s in valid if s["success_rate"] >= best - ROBUST_TOLERANCE)
+    pick = next(s for s in valid if _qualifies(s["success_rate"], best, minimal=False))
     return {"fix": pick["fix"], "success_rate": pick["success_rate"], "fraction": pick["fraction"]}

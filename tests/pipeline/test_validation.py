@@ -1,7 +1,6 @@
 """Phase V beyond the paper's regression test: the fix moved further the same way, and the
 robust value chosen from those stronger values."""
 
-import importlib
 import json
 
 import pytest
@@ -13,6 +12,7 @@ from rocas.pipeline.validation import (
     STRONGER_FRACTIONS,
     _robust,
     stronger_fixes,
+    sweep_settled,
     validation_simulations,
 )
 from rocas.scenarios import load_example
@@ -91,23 +91,23 @@ def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not
 def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_path, monkeypatch):
     import shutil
 
-    analyze_module = importlib.import_module("rocas.pipeline.validation")
-    monkeypatch.setattr(analyze_module, "VALIDATION_SLICE_BATCHES", 1)  # slices of 32 simulations
     red_truck = load_example("roundabout_red_truck")
-    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=12)
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=12, batch_size=8)
     out = tmp_path / "run"
     counts = []
 
     def stop_in_validation(phase, info):
         if phase == "validation":
             counts.append(info.get("evaluations"))
-            if info.get("evaluations", 0) >= 32:
+            if info.get("evaluations", 0) >= 13:
                 raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
         analyze(red_truck, out, cfg, executor=SerialExecutor(), progress=stop_in_validation)
-    assert counts == [0, 32]
-    assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 32
+    # slices of 8: the 5 stronger values on the accident, then the 24 variant runs of the
+    # original and the minimal fix
+    assert counts == [0, 5, 13]
+    assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 13
 
     # the same run without the interruption: phases I-IV as they were, the validation whole
     whole_dir = tmp_path / "whole"
@@ -115,20 +115,62 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
     (whole_dir / "validation.ckpt").unlink()
     counts.clear()
     whole = analyze(red_truck, whole_dir, cfg, executor=SerialExecutor(), resume=True,
-                    progress=lambda phase, info: counts.append(info.get("evaluations"))
-                    if phase == "validation" else None)
+                    progress=lambda phase, info: counts.append(
+                        (info.get("evaluations"), info.get("simulations"))) if phase == "validation"
+                    else None)
     total = whole["evaluations"]["validation"]
-    assert total == validation_simulations(12) == 89
-    assert counts == [0, 32, 64, 89]  # the bar advances slice by slice
+    assert total == whole["validation"]["simulations"] <= validation_simulations(12) == 89
+    assert counts[:4] == [(0, 89), (5, 89), (13, 89), (21, 89)]  # the bar advances slice by slice
+    assert counts[-1] == (total, total)  # and ends at what was run
 
-    # resumed with other slices (the results do not depend on them), from the 33rd simulation
-    monkeypatch.setattr(analyze_module, "VALIDATION_SLICE_BATCHES", 2)
+    # resumed with other slices (the results do not depend on them), from the 14th simulation
+    import rocas.pipeline.validation as validation
+
+    monkeypatch.setattr(validation, "VALIDATION_SLICE_BATCHES", 2)  # slices of 16
     counts.clear()
     resumed = analyze(red_truck, out, cfg, executor=SerialExecutor(), resume=True,
                       progress=lambda phase, info: counts.append(info.get("evaluations"))
                       if phase == "validation" else None)
-    assert counts == [32, 89]
-    assert {k: v for k, v in resumed.items() if k != "timings_s"} == \
-        {k: v for k, v in whole.items() if k != "timings_s"}
+    assert counts[0] == 13 and counts[1] == 29
+    assert {k: v for k, v in resumed.items() if k not in ("timings_s", "settings")} == \
+        {k: v for k, v in whole.items() if k not in ("timings_s", "settings")}
     assert json.loads((out / "validation.json").read_text()) == whole["validation"]
     assert not (out / "validation.ckpt").exists()
+
+
+def _full_sweep_pick(fixed, rates):
+    sweep = _sweep(*rates)
+    return _robust(fixed, sweep, h1_limit=1.0)
+
+
+def test_the_sweep_stops_only_when_the_rest_cannot_change_the_robust_value():
+    import random
+
+    rng = random.Random(5)
+    grid = [k / 20 for k in range(21)]
+    stopped = 0
+    for _ in range(3000):
+        fixed = rng.choice(grid)
+        rates = [rng.choice(grid) for _ in STRONGER_FRACTIONS]
+        if rng.random() < 0.5:
+            rates.sort()  # stronger values tend to avoid more
+        # what the phase runs: each value only while the sweep is not settled
+        run = []
+        for k in range(len(rates)):
+            if sweep_settled(fixed, run, more=True):
+                break
+            run.append(rates[k])
+        stopped += len(run) < len(rates)
+        sweep = _sweep(*rates)
+        for entry in sweep[len(run):]:
+            entry["success_rate"] = None
+        assert _robust(fixed, sweep, h1_limit=1.0) == _full_sweep_pick(fixed, rates), (fixed, rates)
+    assert stopped > 300  # the stop is not a dead letter (683 of 3000 here)
+
+
+def test_the_sweep_is_settled_by_a_minimal_fix_that_cannot_be_beaten_by_the_tolerance():
+    assert sweep_settled(0.97, [], more=True)  # nothing can be 0.05 better than 0.97
+    assert not sweep_settled(0.90, [], more=True)
+    # 0.96 is within 0.05 of any rate; 0.85 falls short of 0.96 by more: 0.25 is the robust one
+    assert sweep_settled(0.625, [0.85, 0.96], more=True)
+    assert not sweep_settled(0.625, [0.85, 0.93], more=True)  # a later 1.0 would rule out 0.93
