@@ -219,6 +219,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         replay_text,
         robust_text,
         settings_text,
+        sweep_text,
     )
 
     con = env.out()
@@ -253,7 +254,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         t.add_row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
                   f"(original) vs {fixed:.0f} % (fixed)"
                   + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else ""))
-        t.add_row("robust value", robust_text(report, "->"))
+        t.add_row("robust value", robust_text(report, "->")
+                  + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
     ss = report["search_space"]
     if ss["parameters_searched"]:
         t.add_row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "

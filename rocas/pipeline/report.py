@@ -194,6 +194,16 @@ def robust_text(report: dict[str, Any], arrow: str = "→") -> str:
     return f"{values}: accident-free in {100 * rob['success_rate']:.0f} % of the variants"
 
 
+def sweep_text(validation: dict[str, Any]) -> str:
+    """How far phase V's sweep of stronger values ran, when it stopped before its end ('' when
+    it ran every value)."""
+    done, whole = validation.get("simulations"), validation.get("simulations_without_stopping")
+    if done is None or whole is None or done >= whole:
+        return ""
+    return (f"the sweep stopped once the robust value was settled ({done} of {whole} simulations; "
+            "the values left out could not change it)")
+
+
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
@@ -227,7 +237,8 @@ def markdown(report: dict[str, Any]) -> str:
                      f"{100 * v['success_rate_original']:.0f} % with the original configuration, "
                      f"{100 * v['success_rate_fixed']:.0f} % with the fix"
                      + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else ""))
-        lines.append(f"- **Robust value**: {robust_text(report)}")
+        lines.append(f"- **Robust value**: {robust_text(report)}"
+                     + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
     t = report["timings_s"]
     lines.append("- **Time**: " + ", ".join(f"{k} {s:.1f} s" for k, s in t.items()))
     lines.append("- **Simulations**: " + ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))

@@ -58,14 +58,17 @@ def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str =
     import numpy as np
     import rerun as rr
 
+    from rocas.pipeline.report import sweep_text
+
     if not validation or not validation.get("variants"):
         return
     stronger = list(validation.get("stronger") or [])
     rec.log(f"{entity}/original",
             rr.BarChart([100 * validation["success_rate_original"]], abscissa=[-0.125], widths=[0.1],
                         color=(220, 50, 47)), static=True)
-    xs = [0.0] + [float(s["fraction"]) for s in stronger]
-    ys = [100 * validation["success_rate_fixed"]] + [100 * s["success_rate"] for s in stronger]
+    run = [s for s in stronger if s.get("success_rate") is not None]  # the sweep may stop early
+    xs = [0.0] + [float(s["fraction"]) for s in run]
+    ys = [100 * validation["success_rate_fixed"]] + [100 * s["success_rate"] for s in run]
     rec.log(f"{entity}/fix", rr.BarChart(np.asarray(ys), abscissa=np.asarray(xs),
                                          widths=[0.1] * len(xs), color=(40, 170, 80)), static=True)
     robust = (validation.get("robust_fix") or {}).get("fraction")
@@ -76,11 +79,13 @@ def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str =
     for st in stronger:
         values = ", ".join(f"{k} = {v:.4g}" for k, v in st["fix"].items())
         mark = " **(robust value)**" if st["fraction"] == robust else ""
+        rate = (f"{100 * st['success_rate']:.1f} %" if st.get("success_rate") is not None
+                else f"not run: {st.get('skipped', 'skipped')}")
         rows.append(f"| {st['fraction']:g} of the way to the range end{mark} | {values} | "
-                    f"{100 * st['success_rate']:.1f} % | {'yes' if st['avoids_accident'] else 'no'} | "
-                    f"{st['h1_m2']:.3g} |")
+                    f"{rate} | {'yes' if st['avoids_accident'] else 'no'} | {st['h1_m2']:.3g} |")
     text = (f"# Validation\n\n{validation['variants']} perturbed variants, each run with every "
-            "configuration below.\n\n" + "\n".join(rows) + "\n")
+            "configuration below that could still change the robust value.\n\n"
+            + "\n".join(rows) + "\n" + (f"\n{sweep_text(validation)}\n" if sweep_text(validation) else ""))
     rec.log(f"{entity}/summary", rr.TextDocument(text, media_type="text/markdown"), static=True)
 
 
