@@ -63,6 +63,30 @@ def test_rowdot_is_the_product_and_does_not_depend_on_the_batch():
     assert all(np.array_equal(numerics.rowdot(x[i:i + 1], w), full[i:i + 1]) for i in range(33))
 
 
+def _bits(a: np.ndarray) -> np.ndarray:
+    return np.asarray(a, dtype=np.float64).view(np.int64)
+
+
+def test_an_element_gets_the_same_bits_with_or_without_special_values_beside_it():
+    # exp and log skip their special-case passes when no argument needs them; a batch with
+    # one special argument must give every other element the same bits
+    x = np.ldexp(RNG.uniform(-1, 1, 5000), RNG.integers(-30, 10, 5000))
+    for special in (np.nan, 800.0, -800.0, np.inf):
+        both = numerics.exp(np.append(x, special))
+        assert np.array_equal(_bits(both[:-1]), _bits(numerics.exp(x)))
+    pos = np.abs(x) + 1e-300
+    for special in (0.0, -1.0, np.nan, np.inf):
+        both = numerics.log(np.append(pos, special))
+        assert np.array_equal(_bits(both[:-1]), _bits(numerics.log(pos)))
+    assert np.array_equal(_bits(numerics.exp(x[:7].reshape(7, 1))), _bits(numerics.exp(x[:7]))[:, None])
+
+
+def test_arctan_is_arctan2_over_one_bit_for_bit():
+    # control fuses arctan into an arctan2 call with x = 1
+    v = np.concatenate([WIDE, [0.0, -0.0, 1.0, -1.0, 1e-310, np.inf, -np.inf, 1 + 2**-52]])
+    assert np.array_equal(_bits(numerics.arctan(v)), _bits(numerics.arctan2(v, np.ones_like(v))))
+
+
 def test_scalars_stay_scalars():
     assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
 

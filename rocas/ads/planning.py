@@ -89,13 +89,28 @@ class Planning:
         self.prev_track = np.full((n, m), -1, dtype=np.int64)
         self.ego_hl = float(world.ego_dims[0]) / 2
         self.ego_hw = float(world.ego_dims[1]) / 2
-
-    def _col(self, name: str) -> np.ndarray:
-        return self.p[name][:, None]
+        # what no step changes: parameter columns (N, 1), the trajectory's time grid, and the
+        # IDM constraints' layout (obstacle follow gaps, then the stop points)
+        self.cols = {k: v[:, None] for k, v in self.p.items()}
+        p, c = self.p, self.cols
+        self.preview = np.arange(0.0, 80.0, 2.0)[None, :]
+        self.t = np.arange(MAX_POINTS)[None, :] * p["trajectory_time_step_s"][:, None]
+        self.valid = self.t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
+                                      np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
+                                      np.full((n, 1), R_DEST)], axis=1)
+        self.reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
+        self.smin = np.concatenate([
+            np.broadcast_to(c["follow_distance_m"], (n, m)),
+            np.broadcast_to(c["stop_decision_min_distance_m"], stop_reason.shape)], axis=1)
+        self.headway = np.where(self.reasons == R_YIELD, c["yield_time_headway_s"],
+                                c["follow_time_headway_s"])
+        self.idm_root = (2.0 * np.sqrt(p["max_accel_mps2"] * p["comfort_decel_mps2"]))[:, None]
+        self.rows = np.arange(n)
 
     def step(self, pred: PredictionOutput, per: PerceptionOutput, loc: LocalizationOutput,
              chassis: ChassisOutput) -> PlanningOutput:
-        p, c = self.p, self._col
+        p, c = self.p, self.cols.__getitem__
         road = self.world.road
         n, m = pred.x.shape
         hl_e, hw_e = self.ego_hl, self.ego_hw
@@ -105,7 +120,7 @@ class Planning:
         # every cap ahead (lane limit, junction, curvature) is previewed with a braking profile at
         # half the comfortable deceleration, so a lower cap is approached gently instead of being
         # met by a hard brake where it starts
-        dist = np.arange(0.0, 80.0, 2.0)[None, :]
+        dist = self.preview
         ahead = s0[:, None] + dist
         _, _, _, kap = reference_at(road, ahead)
         ii = road.ref_index(ahead)
@@ -147,7 +162,7 @@ class Planning:
         cost = np.where(feasible, np.abs(cands), np.inf)
         best = np.argmin(cost, axis=1)
         no_path = ~np.isfinite(cost.min(axis=1))
-        target = np.where(no_path, 0.0, cands[np.arange(n), best])
+        target = np.where(no_path, 0.0, cands[self.rows, best])
         blocking = static & (lo_b < 0.0) & (hi_b > 0.0)
         any_block = blocking.any(axis=1)
         first_s = np.min(np.where(blocking, so - lon_ext, np.inf), axis=1, initial=np.inf)
@@ -267,28 +282,22 @@ class Planning:
         stop_dest = np.full(n, road.destination_s_m - p["destination_buffer_m"] - hl_e)
         stops = np.concatenate([stop_yield, stop_vru, stop_block[:, None], stop_light[:, None],
                                 stop_dest[:, None]], axis=1)
-        stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
-                                      np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
-                                      np.full((n, 1), R_DEST)], axis=1)
         gaps = np.concatenate([gap_follow, stops - s0[:, None]], axis=1)
         leads = np.concatenate([v_lead, np.zeros_like(stops)], axis=1)
-        smin = np.concatenate([np.broadcast_to(c("follow_distance_m"), (n, m)),
-                               np.broadcast_to(c("stop_decision_min_distance_m"), stops.shape)],
-                              axis=1)
-        reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
-        amax, bcomf = p["max_accel_mps2"], p["comfort_decel_mps2"]
+        smin, reasons = self.smin, self.reasons
+        amax = p["max_accel_mps2"]
         a_free = amax * (1.0 - numerics.power(v0 / np.maximum(v_cruise, 0.1), p["idm_exponent"]))
-        headway = np.where(reasons == R_YIELD, c("yield_time_headway_s"), c("follow_time_headway_s"))
+        headway = self.headway
         sstar = smin + np.maximum(0.0, v0[:, None] * headway + v0[:, None]
-                                  * (v0[:, None] - leads) / (2.0 * np.sqrt(amax * bcomf))[:, None])
+                                  * (v0[:, None] - leads) / self.idm_root)
         active = np.isfinite(gaps)
         a_c = np.where(active, a_free[:, None] - amax[:, None] * (
             sstar / np.maximum(np.where(active, gaps, 1.0), 0.1)) ** 2, inf)
         binding = np.argmin(a_c, axis=1)
         a_cmd = np.minimum(a_free, a_c.min(axis=1))
         bound = np.isfinite(a_c.min(axis=1)) & (a_c.min(axis=1) < a_free)
-        reason = np.where(bound, reasons[np.arange(n), binding], R_CRUISE)
-        bind_gap = np.where(bound, gaps[np.arange(n), binding], inf)
+        reason = np.where(bound, reasons[self.rows, binding], R_CRUISE)
+        bind_gap = np.where(bound, gaps[self.rows, binding], inf)
         # hold behind a vehicle beside the path: the closing speed is capped so that the ego,
         # braking at the comfortable deceleration, ends at the vehicle's speed a standstill gap
         # plus a yield headway behind its rear (late, unlike IDM's following); never harder
@@ -323,9 +332,7 @@ class Planning:
         estop_reason = np.where(pbrake, E_PERCEPTION_BRAKE, estop_reason)
         reason = np.where(pbrake, R_PBRAKE, reason)
         # --- trajectory and collision check ---------------------------------------------------
-        k = np.arange(MAX_POINTS)
-        t = k[None, :] * p["trajectory_time_step_s"][:, None]
-        valid = t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        t, valid = self.t, self.valid
         vcap = np.maximum(v_cruise, v0)
         traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # collision check at the forecast times (and now): ego trajectory vs obstacles
@@ -345,8 +352,8 @@ class Planning:
         hit_k = hit.any(axis=1)
         collide = hit_k.any(axis=1)
         k_hit = np.argmax(hit_k, axis=1)
-        t_hit = tp[np.arange(n), k_hit]
-        s_hit = es[np.arange(n), k_hit]
+        t_hit = tp[self.rows, k_hit]
+        s_hit = es[self.rows, k_hit]
         imminent = collide & (t_hit < p["estop_ttc_s"])
         fallback = collide & ~imminent
         a_fb = -v0 * v0 / (2.0 * np.maximum(s_hit - s0 - 1.0, 0.3))

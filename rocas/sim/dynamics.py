@@ -6,6 +6,7 @@ functions only integrate them. All functions are vectorised over any leading sha
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,12 @@ class VehicleState:
     yaw: np.ndarray
     course: np.ndarray
     speed: np.ndarray
+
+
+@functools.cache
+def _slip_decay(dt: float) -> float:
+    """Factor by which slip decays over one step of ``dt`` [s] while the tyres grip."""
+    return numerics.exp(-dt / SLIP_RELAX_S)
 
 
 def bicycle_step(
@@ -71,7 +78,7 @@ def bicycle_step(
     course = state.course + v_mid * kappa_eff * dt
     slip = wrap_angle(state.yaw - state.course) + v_mid * (curvature - kappa_eff) * dt
     slip = np.where(sliding, clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
-                    slip * numerics.exp(-dt / SLIP_RELAX_S))
+                    slip * _slip_decay(dt))
     mid_course = 0.5 * (state.course + course)
     x = state.x + v_mid * np.cos(mid_course) * dt
     y = state.y + v_mid * np.sin(mid_course) * dt
