@@ -96,6 +96,7 @@ class Planning:
         self.preview = np.arange(0.0, 80.0, 2.0)[None, :]
         self.t = np.arange(MAX_POINTS)[None, :] * p["trajectory_time_step_s"][:, None]
         self.valid = self.t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        self.accel_fade = 1.0 - numerics.exp(-self.t / ACCEL_DECAY_S)  # (N, K)
         stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
                                       np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
                                       np.full((n, 1), R_DEST)], axis=1)
@@ -340,16 +341,24 @@ class Planning:
         tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
             tp <= c("collision_check_horizon_s")) & (tp <= p["trajectory_horizon_s"][:, None])
         ex, ey, eh, es = self._sample(traj, t, tp)
-        ox = np.concatenate([pred.x[..., None], pred.traj_x], axis=-1)
-        oy = np.concatenate([pred.y[..., None], pred.traj_y], axis=-1)
-        oh = np.where(tangent, np.concatenate([head_now[..., None], pred.traj_heading], -1),
-                      pred.heading[..., None])
-        gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
-                      ox, oy, oh, hl_o[..., None], hw_o[..., None])
-        thr = np.where(pred.is_static, c("collision_check_static_m"),
-                       c("collision_check_moving_m"))
-        hit = (consider | mov)[..., None] & tcheck[:, None, :] & (gap < thr[..., None])
-        hit_k = hit.any(axis=1)
+        # only slots some variant considers are checked (the others' gaps would be discarded)
+        checked = consider | mov
+        cols = np.flatnonzero(checked.any(axis=0))
+        if cols.size:
+            sub = (slice(None), cols)
+            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[sub]], axis=-1)
+            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[sub]], axis=-1)
+            oh = np.where(tangent, np.concatenate([head_now[sub][..., None],
+                                                   pred.traj_heading[sub]], -1),
+                          pred.heading[sub][..., None])
+            gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
+                          ox, oy, oh, hl_o[sub][..., None], hw_o[sub][..., None])
+            thr = np.where(pred.is_static[sub], c("collision_check_static_m"),
+                           c("collision_check_moving_m"))
+            hit = checked[sub][..., None] & tcheck[:, None, :] & (gap < thr[..., None])
+            hit_k = hit.any(axis=1)
+        else:
+            hit_k = np.zeros(tcheck.shape, dtype=bool)
         collide = hit_k.any(axis=1)
         k_hit = np.argmax(hit_k, axis=1)
         t_hit = tp[self.rows, k_hit]
@@ -413,7 +422,7 @@ class Planning:
                     t: np.ndarray, offset_at) -> tuple[np.ndarray, ...]:  # noqa: ANN001
         road = self.world.road
         a = a_cmd[:, None]
-        v_acc = v0[:, None] + a * ACCEL_DECAY_S * (1.0 - numerics.exp(-t / ACCEL_DECAY_S))
+        v_acc = v0[:, None] + a * ACCEL_DECAY_S * self.accel_fade
         v_dec = v0[:, None] + a * t
         v = clip(np.where(a > 0, v_acc, v_dec), 0.0, vcap[:, None])
         dt = np.diff(t, axis=1)
