@@ -193,6 +193,9 @@ def tanh(x: np.ndarray | float) -> np.ndarray:
     return _out(out, scalar)
 
 
+_ROWDOT_LOOP_ROWS = 128  # from this many rows on, summing term by term is faster
+
+
 def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``x @ w`` without BLAS: (N, F) x (F, H) -> (N, H), summed over F in a fixed order.
 
@@ -200,6 +203,17 @@ def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """
     x = np.asarray(x, dtype=np.float64)
     w = np.asarray(w, dtype=np.float64)
-    # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
-    # numpy's iteration order, which no CPU feature or BLAS kernel changes
-    return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+    if x.shape[0] < _ROWDOT_LOOP_ROWS or w.shape[0] == 0:
+        # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
+        # numpy's iteration order, which no CPU feature or BLAS kernel changes
+        return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+    # the same sequence of roundings, (((0 + x0 w0) + x1 w1) + ...), term by term on
+    # (N, H) arrays: a large batch's (N, F, H) temporary would not fit in the cache
+    xt = np.ascontiguousarray(x.T)[:, :, None]  # (F, N, 1)
+    acc = np.multiply(xt[0], w[0])
+    acc += 0.0  # numpy's sum starts from +0.0: a first term of -0.0 becomes +0.0
+    term = np.empty_like(acc)
+    for f in range(1, w.shape[0]):
+        np.multiply(xt[f], w[f], out=term)
+        np.add(acc, term, out=acc)
+    return acc

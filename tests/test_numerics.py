@@ -87,6 +87,19 @@ def test_arctan_is_arctan2_over_one_bit_for_bit():
     assert np.array_equal(_bits(numerics.arctan(v)), _bits(numerics.arctan2(v, np.ones_like(v))))
 
 
+def test_rowdot_sums_a_large_batch_in_the_same_order_as_a_small_one():
+    # from _ROWDOT_LOOP_ROWS rows on, rowdot sums term by term; every row must keep its bits
+    x, w = RNG.normal(size=(300, 64)), RNG.normal(size=(64, 16))
+    x[5, :] = 0.0
+    x[6, ::2] = -0.0
+    w[:, 3] = -np.abs(w[:, 3])  # row 5, column 3: a sum of -0.0 terms, which is +0.0
+    big = numerics.rowdot(x, w)
+    assert x.shape[0] >= numerics._ROWDOT_LOOP_ROWS
+    small = np.concatenate([numerics.rowdot(x[i:i + 10], w) for i in range(0, 300, 10)])
+    assert np.array_equal(_bits(big), _bits(small))
+    assert not np.signbit(big[5, 3])
+
+
 def test_scalars_stay_scalars():
     assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
 

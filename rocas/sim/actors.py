@@ -20,6 +20,7 @@ from rocas.sim.dynamics import (
     VehicleState,
     bicycle_step,
     path_point,
+    path_rows,
     profile_speed,
 )
 from rocas.sim.geometry import clip, wrap_angle
@@ -109,8 +110,7 @@ class _Statics:
     lat_reach: np.ndarray   # (N, A, A + 1) lateral distance within which another is ahead [m]
     lon_reach: np.ndarray   # (N, A, A + 1) centre distance of two touching bodies [m]
     rows: np.ndarray        # (N, 1) batch index
-    rn: np.ndarray          # (N, 1, 1) batch index
-    ra: np.ndarray          # (1, A, 1) actor index
+    path_rows: np.ndarray   # (N, A, 1) first sample of each path in the flattened paths
 
 
 _STATICS: weakref.WeakKeyDictionary[BatchWorld, _Statics] = weakref.WeakKeyDictionary()
@@ -130,8 +130,7 @@ def _statics(world: BatchWorld) -> _Statics:
             not_self=~np.eye(a, a + 1, dtype=bool)[None],
             lat_reach=(world.actor_dims[..., 1:2] + ow[:, None, :]) / 2 + 0.3,
             lon_reach=(world.actor_dims[..., 0:1] + ol[:, None, :]) / 2,
-            rows=np.arange(n)[:, None], rn=np.arange(n)[:, None, None],
-            ra=np.arange(a)[None, :, None])
+            rows=np.arange(n)[:, None], path_rows=path_rows(world.actor_path)[..., None])
         _STATICS[world] = got
     return got
 
@@ -177,11 +176,10 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     # project vehicles back on their path (local window)
     p = world.actor_path.shape[2]
     cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, p - 1)
-    rn, ra = st.rn, st.ra
-    pts = world.actor_path[rn, ra, cand]  # (N, A, W, 2)
+    pts = world.actor_path.reshape(-1, 2)[st.path_rows + cand]  # (N, A, W, 2)
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
-    v_idx = cand[rn[..., 0], ra[..., 0], best]
+    v_idx = np.take_along_axis(cand, best[..., None], -1)[..., 0]
     # points: move along the path
     v_pt = np.maximum(fa.speed + accel * dt, 0.0)
     s_pt = state.s + 0.5 * (b.speed + v_pt) * dt

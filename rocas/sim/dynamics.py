@@ -107,10 +107,17 @@ def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndar
     f = clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    n, a = s.shape
-    rn = np.arange(n)[:, None]
-    ra = np.arange(a)[None, :]
-    p0 = path[rn, ra, i]
-    p1 = path[rn, ra, i + 1]
+    # one gather on the flattened paths: indexing with three broadcast index arrays costs
+    # several times as much on a large batch
+    k = path_rows(path) + i
+    flat = path.reshape(-1, 2)
+    p0 = flat[k]
+    p1 = flat[k + 1]
     return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
-            heading[rn, ra, i])
+            heading.reshape(-1)[k])
+
+
+def path_rows(path: np.ndarray) -> np.ndarray:
+    """(N, A) index of each path's first sample in ``path.reshape(-1, 2)`` (path (N, A, P, 2))."""
+    n, a, p = path.shape[:3]
+    return np.arange(0, n * a * p, p).reshape(n, a)
