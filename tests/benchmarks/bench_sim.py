@@ -3,9 +3,9 @@
 Batch mode with the full ADS on a 30-second scenario for batch sizes 1, 64, 256
 (variant-ticks per second of CPU time, min and median of R repeats), against a baseline:
 the same benchmark run on another git revision's ``rocas`` (by default ``main``, extracted
-with ``git archive`` into a temporary directory) in the same run, the two alternated batch
-size by batch size in child processes so both see the same machine load. Also recording mode
-(a 30-second scenario written to MCAP).
+with ``git archive`` into a temporary directory) in the same run, the two alternated repeat
+by repeat in child processes so both see the same machine load. Also recording mode (a
+30-second scenario written to MCAP).
 
 Targets (issue #24, one core, junction_straight): >= 100,000 variant-ticks/s at batch 256,
 >= 50,000 at batch 64, and batch 1 at least 3x the baseline.
@@ -71,6 +71,7 @@ def extract(ref: str, into: Path) -> str:
 
 
 def recording_mode(scenario_name: str, repeat: int) -> None:
+    sys.path.insert(0, str(ROOT))  # this checkout's rocas, as the children import it
     from rocas.scenarios import load_example
     from rocas.sim.engine import simulate
 
@@ -106,11 +107,16 @@ def main() -> None:
         print(f"{'batch':>5} {'code':>8} {'min s':>7} {'med s':>7} {'vt/s (min)':>11} "
               f"{'vt/s (med)':>11} {'speed-up min/med':>17}")
         for n in (int(x) for x in args.sizes.split(",")):
-            times, ticks = measure(ROOT, args.scenario, n, args.repeat)
+            # one repeat per child, the two codes alternating, so that both see the same load
+            times, base_times, ticks = [], [], 0
+            for _ in range(args.repeat):
+                if base_root is not None:
+                    base_times += measure(base_root, args.scenario, n, 1)[0]
+                got, ticks = measure(ROOT, args.scenario, n, 1)
+                times += got
             rows = [("this", times)]
             if base_root is not None:
-                rows.insert(0, ("baseline", measure(base_root, args.scenario, n,
-                                                    args.repeat)[0]))
+                rows.insert(0, ("baseline", base_times))
             base = rows[0][1]
             for label, ts in rows:
                 lo, med = min(ts), statistics.median(ts)
