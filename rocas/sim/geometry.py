@@ -157,8 +157,6 @@ class NearestGrid:
         self.shape = candidates.shape[:2]
         # the point set plus a far-away sentinel row (index num_points)
         self.points = np.vstack([points, [[1e7, 1e7]]])
-        self.px = np.ascontiguousarray(self.points[:, 0])
-        self.py = np.ascontiguousarray(self.points[:, 1])
 
     @classmethod
     def build(cls, points: np.ndarray, cell_m: float, k: int, margin_m: float) -> NearestGrid:
@@ -191,7 +189,8 @@ def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndar
     """Index of the grid's nearest point and the squared distance to it, for query points of
     any shape (far queries get the sentinel index ``num_points`` at a huge distance)."""
     cand = grid.query(x, y)
-    d2 = (grid.px[cand] - x[..., None]) ** 2 + (grid.py[cand] - y[..., None]) ** 2
+    pts = grid.points[cand]  # (..., K, 2): one gather
+    d2 = (pts[..., 0] - x[..., None]) ** 2 + (pts[..., 1] - y[..., None]) ** 2
     k = cand.shape[-1]
     c2 = cand.reshape(-1, k)
     d22 = d2.reshape(-1, k)
