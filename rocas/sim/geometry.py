@@ -155,6 +155,7 @@ class NearestGrid:
         self.cell_m = cell_m
         self.candidates = candidates  # (GX, GY, K) int
         self.shape = candidates.shape[:2]
+        self._flat = candidates.reshape(-1, candidates.shape[2])  # (GX * GY, K): one gather
         # the point set plus a far-away sentinel row (index num_points)
         self.points = np.vstack([points, [[1e7, 1e7]]])
 
@@ -182,7 +183,7 @@ class NearestGrid:
         """Candidate point indices near (x, y), shape (..., K)."""
         ix = clip(((x - self.origin[0]) / self.cell_m).astype(np.int64), 0, self.shape[0] - 1)
         iy = clip(((y - self.origin[1]) / self.cell_m).astype(np.int64), 0, self.shape[1] - 1)
-        return self.candidates[ix, iy]
+        return self._flat[ix * self.shape[1] + iy]
 
 
 def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -191,9 +192,5 @@ def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndar
     cand = grid.query(x, y)
     pts = grid.points[cand]  # (..., K, 2): one gather
     d2 = (pts[..., 0] - x[..., None]) ** 2 + (pts[..., 1] - y[..., None]) ** 2
-    k = cand.shape[-1]
-    c2 = cand.reshape(-1, k)
-    d22 = d2.reshape(-1, k)
-    j = np.argmin(d22, axis=1)
-    r = np.arange(c2.shape[0])
-    return c2[r, j].reshape(cand.shape[:-1]), d22[r, j].reshape(cand.shape[:-1])
+    j = np.argmin(d2, axis=-1)[..., None]
+    return (np.take_along_axis(cand, j, -1)[..., 0], np.take_along_axis(d2, j, -1)[..., 0])
