@@ -203,6 +203,14 @@ def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """
     x = np.asarray(x, dtype=np.float64)
     w = np.asarray(w, dtype=np.float64)
+    # A feature that is zero in every row adds x * w = +-0.0 to each sum, and that changes no
+    # bit: a sum starts at +0.0 and, rounding to nearest, only -0.0 + -0.0 gives -0.0, so a
+    # sum is never -0.0 and s + (+-0.0) == s. Such features are skipped (a camera view is
+    # mostly empty columns); with a non-finite weight, 0 * w would be NaN, so not then.
+    if x.shape[0] and w.shape[0]:
+        used = np.logical_or.reduce(x != 0.0, axis=0)
+        if not used.all() and np.isfinite(w).all():
+            x, w = x[:, used], w[used]
     if x.shape[0] < _ROWDOT_LOOP_ROWS or w.shape[0] == 0:
         # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
         # numpy's iteration order, which no CPU feature or BLAS kernel changes

@@ -100,6 +100,29 @@ def test_rowdot_sums_a_large_batch_in_the_same_order_as_a_small_one():
     assert not np.signbit(big[5, 3])
 
 
+def _rowdot_every_term(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+
+
+def test_rowdot_skips_all_zero_features_without_changing_a_bit():
+    for rows in (3, 200):
+        x = RNG.normal(size=(rows, 64))
+        x[:, ::3] = 0.0
+        x[:, 1::7] = -0.0
+        w = RNG.normal(size=(64, 8))
+        w[2::3, 5] = -w[2::3, 5]
+        assert np.array_equal(_bits(numerics.rowdot(x, w)), _bits(_rowdot_every_term(x, w)))
+        # all features zero: every sum is +0.0, also where every term is -0.0
+        z = np.zeros((rows, 64))
+        assert np.array_equal(_bits(numerics.rowdot(z, -np.abs(w))),
+                              _bits(_rowdot_every_term(z, -np.abs(w))))
+        # a non-finite weight times a zero feature is NaN, as in the full sum
+        w_inf = w.copy()
+        w_inf[0, 0] = np.inf
+        with np.errstate(invalid="ignore"):
+            assert np.isnan(numerics.rowdot(x, w_inf)[:, 0]).all()
+
+
 def test_scalars_stay_scalars():
     assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
 
