@@ -120,6 +120,7 @@ class Perception:
         self.world = world
         self.p = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("perception.")}
         self.period = period_s
+        self._opacity: np.ndarray | None = None
         n = world.batch_size
         m = len(world.actor_ids) + len(world.object_ids)
         self.track_id = np.full((n, m), -1, dtype=np.int64)
@@ -154,6 +155,17 @@ class Perception:
                                                         * rain)
         return factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0), glare, factor
 
+    def _edge_opacity(self) -> np.ndarray:
+        """(N, 1, 1, E) how much each area edge hides what is behind it (0 for an area a variant
+        disabled); fixed for a run, computed once."""
+        if self._opacity is None:
+            w = self.world
+            enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
+            opacity = np.where(self.edge_weight_kind == 0, 1.0,
+                               self.p["vegetation_opacity"][:, None])  # (N, E)
+            self._opacity = np.where(enabled, opacity, 0.0)[:, None, None, :]
+        return self._opacity
+
     def _visibility(self, ex: np.ndarray, ey: np.ndarray, gt: ObstacleFrame) -> np.ndarray:
         """Visible fraction of each obstacle (N, M) from three sample points."""
         w = self.world
@@ -164,10 +176,7 @@ class Perception:
         px = np.stack([gt.x, gt.x + hl * c, gt.x - hl * c], -1)  # (N, M, 3)
         py = np.stack([gt.y, gt.y + hl * s, gt.y - hl * s], -1)
         crosses = segments_blocked(ex[:, None, None], ey[:, None, None], px, py, w.area_edges)
-        enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
-        opacity = np.where(self.edge_weight_kind == 0, 1.0,
-                           self.p["vegetation_opacity"][:, None])  # (N, E)
-        block = np.where(crosses & enabled[:, None, None, :], opacity[:, None, None, :], 0.0)
+        block = np.where(crosses, self._edge_opacity(), 0.0)
         return (1.0 - block.max(axis=-1)).mean(axis=-1)
 
     # -- the step -----------------------------------------------------------------------------
