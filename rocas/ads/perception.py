@@ -7,6 +7,7 @@ track id changes when the association gate is violated (an id switch), as real t
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -350,17 +351,32 @@ def ground_truth(world: BatchWorld, ax: np.ndarray, ay: np.ndarray, ayaw: np.nda
                  ) -> ObstacleFrame:
     """Stack actor states (N, A) and the map objects into obstacle slots (N, A + E)."""
     cat = np.concatenate
+    fixed = _fixed_slots(world)
     return ObstacleFrame(
         x=cat([ax, world.object_pos[..., 0]], 1), y=cat([ay, world.object_pos[..., 1]], 1),
-        yaw=cat([ayaw, world.object_yaw], 1),
-        length=cat([world.actor_dims[..., 0], world.object_dims[..., 0]], 1),
-        width=cat([world.actor_dims[..., 1], world.object_dims[..., 1]], 1),
-        height=cat([world.actor_dims[..., 2], world.object_dims[..., 2]], 1),
-        kind=cat([world.actor_kind, world.object_kind], 1),
-        model=cat([world.actor_model, np.full(world.object_kind.shape, -1)], 1),
-        rgb=cat([world.actor_rgb, np.broadcast_to(np.array([0.95, 0.45, 0.05]),
-                                                  (*world.object_kind.shape, 3))], 1),
-        color=cat([world.actor_color, np.full(world.object_kind.shape, 8)], 1),  # orange
+        yaw=cat([ayaw, world.object_yaw], 1), **fixed,
     )
+
+
+_FIXED_SLOTS: weakref.WeakKeyDictionary[BatchWorld, dict[str, np.ndarray]] = (
+    weakref.WeakKeyDictionary())
+
+
+def _fixed_slots(world: BatchWorld) -> dict[str, np.ndarray]:
+    """The obstacle slots' fields no step changes (sizes, kinds, colours), stacked once."""
+    got = _FIXED_SLOTS.get(world)
+    if got is None:
+        cat = np.concatenate
+        got = _FIXED_SLOTS[world] = dict(
+            length=cat([world.actor_dims[..., 0], world.object_dims[..., 0]], 1),
+            width=cat([world.actor_dims[..., 1], world.object_dims[..., 1]], 1),
+            height=cat([world.actor_dims[..., 2], world.object_dims[..., 2]], 1),
+            kind=cat([world.actor_kind, world.object_kind], 1),
+            model=cat([world.actor_model, np.full(world.object_kind.shape, -1)], 1),
+            rgb=cat([world.actor_rgb, np.broadcast_to(np.array([0.95, 0.45, 0.05]),
+                                                      (*world.object_kind.shape, 3))], 1),
+            color=cat([world.actor_color, np.full(world.object_kind.shape, 8)], 1),  # orange
+        )
+    return got
 
 
