@@ -51,6 +51,16 @@ _PI_2_HI = 1.57079632679489655800e00
 _PI_2_LO = 6.12323399573676603587e-17
 
 
+_EXP_PLAIN = 708.0  # |x| <= this: no clipping, no overflow or underflow to handle
+_max = np.maximum.reduce
+_min = np.minimum.reduce
+
+
+def _max_abs(x: np.ndarray) -> float:
+    """Largest |x| (NaN if any element is NaN)."""
+    return _max(np.abs(x), axis=None)
+
+
 def _out(result: np.ndarray, scalar: bool) -> np.ndarray:
     return result[()] if scalar else result
 
@@ -59,7 +69,10 @@ def exp(x: np.ndarray | float) -> np.ndarray:
     """e**x, elementwise. Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
     scalar = xa.ndim == 0
-    xc = np.clip(xa, _EXP_MIN, _EXP_MAX)
+    # one reduction tells whether any argument needs the special cases (NaN fails the test);
+    # without them the result is the same arithmetic minus five passes over the array
+    plain = xa.size == 0 or bool(_max_abs(xa) <= _EXP_PLAIN)
+    xc = xa if plain else np.minimum(np.maximum(xa, _EXP_MIN), _EXP_MAX)
     k = np.rint(xc * _INV_LN2)
     hi = xc - k * _LN2_HI
     lo = k * _LN2_LO
@@ -68,6 +81,8 @@ def exp(x: np.ndarray | float) -> np.ndarray:
     p = _EXP_P
     c = r - t * (p[0] + t * (p[1] + t * (p[2] + t * (p[3] + t * p[4]))))
     y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
+    if plain:
+        return _out(np.ldexp(y, k.astype(np.int64)), scalar)
     out = np.ldexp(y, np.where(k == k, k, 0.0).astype(np.int64))  # NaN: any exponent
     out = np.where(xa > _EXP_MAX, np.inf, out)
     out = np.where(xa < _EXP_MIN, 0.0, out)
@@ -84,8 +99,10 @@ def log(x: np.ndarray | float) -> np.ndarray:
     """Natural logarithm, elementwise (``-inf`` at 0, NaN below). Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
     scalar = xa.ndim == 0
-    ok = np.isfinite(xa) & (xa > 0.0)
-    m, e = np.frexp(np.where(ok, xa, 1.0))  # xa = m * 2**e, 0.5 <= m < 1
+    # all arguments positive and finite (NaN fails both tests): no special cases to mask
+    plain = xa.size == 0 or bool((_min(xa, axis=None) > 0.0) & (_max(xa, axis=None) < np.inf))
+    ok = None if plain else np.isfinite(xa) & (xa > 0.0)
+    m, e = np.frexp(xa if plain else np.where(ok, xa, 1.0))  # xa = m * 2**e, 0.5 <= m < 1
     big = m < 0.5 * _SQRT2  # move m into [sqrt(2)/2, sqrt(2))
     m = np.where(big, 2.0 * m, m)
     k = (e - big.astype(e.dtype)).astype(np.float64)
@@ -99,6 +116,8 @@ def log(x: np.ndarray | float) -> np.ndarray:
     r = t2 + t1
     hfsq = 0.5 * f * f
     out = k * _LN2_HI - ((hfsq - (s * (hfsq + r) + k * _LN2_LO)) - f)
+    if plain:
+        return _out(out, scalar)
     out = np.where(xa == 0.0, -np.inf, out)
     out = np.where(xa == np.inf, np.inf, out)
     out = np.where((xa < 0.0) | np.isnan(xa), np.nan, out)
@@ -174,6 +193,9 @@ def tanh(x: np.ndarray | float) -> np.ndarray:
     return _out(out, scalar)
 
 
+_ROWDOT_LOOP_ROWS = 128  # from this many rows on, summing term by term is faster
+
+
 def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``x @ w`` without BLAS: (N, F) x (F, H) -> (N, H), summed over F in a fixed order.
 
@@ -181,6 +203,25 @@ def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """
     x = np.asarray(x, dtype=np.float64)
     w = np.asarray(w, dtype=np.float64)
-    # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
-    # numpy's iteration order, which no CPU feature or BLAS kernel changes
-    return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+    # A feature that is zero in every row adds x * w = +-0.0 to each sum, and that changes no
+    # bit: a sum starts at +0.0 and, rounding to nearest, only -0.0 + -0.0 gives -0.0, so a
+    # sum is never -0.0 and s + (+-0.0) == s. Such features are skipped (a camera view is
+    # mostly empty columns); with a non-finite weight, 0 * w would be NaN, so not then.
+    if x.shape[0] and w.shape[0]:
+        used = np.logical_or.reduce(x != 0.0, axis=0)
+        if not used.all() and np.isfinite(w).all():
+            x, w = x[:, used], w[used]
+    if x.shape[0] < _ROWDOT_LOOP_ROWS or w.shape[0] == 0:
+        # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
+        # numpy's iteration order, which no CPU feature or BLAS kernel changes
+        return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+    # the same sequence of roundings, (((0 + x0 w0) + x1 w1) + ...), term by term on
+    # (N, H) arrays: a large batch's (N, F, H) temporary would not fit in the cache
+    xt = np.ascontiguousarray(x.T)[:, :, None]  # (F, N, 1)
+    acc = np.multiply(xt[0], w[0])
+    acc += 0.0  # numpy's sum starts from +0.0: a first term of -0.0 becomes +0.0
+    term = np.empty_like(acc)
+    for f in range(1, w.shape[0]):
+        np.multiply(xt[f], w[f], out=term)
+        np.add(acc, term, out=acc)
+    return acc

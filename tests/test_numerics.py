@@ -63,6 +63,66 @@ def test_rowdot_is_the_product_and_does_not_depend_on_the_batch():
     assert all(np.array_equal(numerics.rowdot(x[i:i + 1], w), full[i:i + 1]) for i in range(33))
 
 
+def _bits(a: np.ndarray) -> np.ndarray:
+    return np.asarray(a, dtype=np.float64).view(np.int64)
+
+
+def test_an_element_gets_the_same_bits_with_or_without_special_values_beside_it():
+    # exp and log skip their special-case passes when no argument needs them; a batch with
+    # one special argument must give every other element the same bits
+    x = np.ldexp(RNG.uniform(-1, 1, 5000), RNG.integers(-30, 10, 5000))
+    for special in (np.nan, 800.0, -800.0, np.inf):
+        both = numerics.exp(np.append(x, special))
+        assert np.array_equal(_bits(both[:-1]), _bits(numerics.exp(x)))
+    pos = np.abs(x) + 1e-300
+    for special in (0.0, -1.0, np.nan, np.inf):
+        both = numerics.log(np.append(pos, special))
+        assert np.array_equal(_bits(both[:-1]), _bits(numerics.log(pos)))
+    assert np.array_equal(_bits(numerics.exp(x[:7].reshape(7, 1))), _bits(numerics.exp(x[:7]))[:, None])
+
+
+def test_arctan_is_arctan2_over_one_bit_for_bit():
+    # control fuses arctan into an arctan2 call with x = 1
+    v = np.concatenate([WIDE, [0.0, -0.0, 1.0, -1.0, 1e-310, np.inf, -np.inf, 1 + 2**-52]])
+    assert np.array_equal(_bits(numerics.arctan(v)), _bits(numerics.arctan2(v, np.ones_like(v))))
+
+
+def test_rowdot_sums_a_large_batch_in_the_same_order_as_a_small_one():
+    # from _ROWDOT_LOOP_ROWS rows on, rowdot sums term by term; every row must keep its bits
+    x, w = RNG.normal(size=(300, 64)), RNG.normal(size=(64, 16))
+    x[5, :] = 0.0
+    x[6, ::2] = -0.0
+    w[:, 3] = -np.abs(w[:, 3])  # row 5, column 3: a sum of -0.0 terms, which is +0.0
+    big = numerics.rowdot(x, w)
+    assert x.shape[0] >= numerics._ROWDOT_LOOP_ROWS
+    small = np.concatenate([numerics.rowdot(x[i:i + 10], w) for i in range(0, 300, 10)])
+    assert np.array_equal(_bits(big), _bits(small))
+    assert not np.signbit(big[5, 3])
+
+
+def _rowdot_every_term(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return (x[:, :, None] * w[None, :, :]).sum(axis=1)
+
+
+def test_rowdot_skips_all_zero_features_without_changing_a_bit():
+    for rows in (3, 200):
+        x = RNG.normal(size=(rows, 64))
+        x[:, ::3] = 0.0
+        x[:, 1::7] = -0.0
+        w = RNG.normal(size=(64, 8))
+        w[2::3, 5] = -w[2::3, 5]
+        assert np.array_equal(_bits(numerics.rowdot(x, w)), _bits(_rowdot_every_term(x, w)))
+        # all features zero: every sum is +0.0, also where every term is -0.0
+        z = np.zeros((rows, 64))
+        assert np.array_equal(_bits(numerics.rowdot(z, -np.abs(w))),
+                              _bits(_rowdot_every_term(z, -np.abs(w))))
+        # a non-finite weight times a zero feature is NaN, as in the full sum
+        w_inf = w.copy()
+        w_inf[0, 0] = np.inf
+        with np.errstate(invalid="ignore"):
+            assert np.isnan(numerics.rowdot(x, w_inf)[:, 0]).all()
+
+
 def test_scalars_stay_scalars():
     assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
 

@@ -100,12 +100,16 @@ class Control:
                           p["pure_pursuit_lookahead_gain_s"] * speed)
         s_rows = np.where(plan.valid, plan.s, plan.s[:, -1:] + 1e3 + plan.t)
         tx, ty = _interp_rows(s_match + look, s_rows, plan.x, plan.y)
-        alpha = wrap_angle(numerics.arctan2(ty - loc.y, tx - loc.x) - loc.heading)
-        delta_pp = numerics.arctan2(2.0 * wb * np.sin(alpha), look)
         kappa = plan.kappa[r, i]
-        delta_st = -heading_err - numerics.arctan2(p["stanley_gain"] * lateral,
-                                             speed + p["stanley_softening_mps"]) \
-            + p["curvature_feedforward_gain"] * numerics.arctan(wb * kappa)
+        # one arctan2 call for the three angles that do not depend on each other (arctan(v) is
+        # arctan2(v, 1) bit for bit); each element's arithmetic is what three calls would do
+        bearing, stanley, feedforward = numerics.arctan2(
+            np.concatenate([ty - loc.y, p["stanley_gain"] * lateral, wb * kappa]),
+            np.concatenate([tx - loc.x, speed + p["stanley_softening_mps"], np.ones(n)]),
+        ).reshape(3, n)
+        alpha = wrap_angle(bearing - loc.heading)
+        delta_pp = numerics.arctan2(2.0 * wb * np.sin(alpha), look)
+        delta_st = -heading_err - stanley + p["curvature_feedforward_gain"] * feedforward
         delta = np.where(p["lateral_controller"] >= 0.5, delta_st, delta_pp)
         target = clip(delta / p["max_steer_angle_rad"] * 100.0, -100.0, 100.0)
         max_step = p["steering_rate_limit_pct_s"] * dt

@@ -97,6 +97,8 @@ class Canbus:
         self.tau = params["canbus.actuator_time_constant_s"]
         self.steer_rate = params["canbus.steer_rate_limit_radps"]
         self.speed_std = params["canbus.speed_sensor_noise_std_mps"]
+        # the actuators' first-order lag per step, (N,): fixed for a run
+        self.lag_gain = 1.0 - numerics.exp(-world.dt_s / self.tau)
         self.accel = np.zeros(n)          # realised actuator acceleration [m/s^2]
         self.wheel_angle = np.zeros(n)    # road-wheel angle [rad]
         self.throttle = np.zeros(n)
@@ -120,7 +122,7 @@ class Canbus:
         self.throttle, self.brake, self.steering_pct, self.estop = (
             throttle, brake, steering_pct, estop)
         target = throttle / 100.0 * self.max_accel - brake / 100.0 * self.max_decel
-        k = 1.0 - numerics.exp(-dt / self.tau)
+        k = self.lag_gain
         self.accel = self.accel + (target - self.accel) * k
         target_angle = clip(steering_pct, -100.0, 100.0) / 100.0 * self.max_steer
         step = clip((target_angle - self.wheel_angle) * k, -self.steer_rate * dt,

@@ -7,6 +7,7 @@ track id changes when the association gate is violated (an id switch), as real t
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -120,6 +121,7 @@ class Perception:
         self.world = world
         self.p = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("perception.")}
         self.period = period_s
+        self._opacity: np.ndarray | None = None
         n = world.batch_size
         m = len(world.actor_ids) + len(world.object_ids)
         self.track_id = np.full((n, m), -1, dtype=np.int64)
@@ -154,6 +156,17 @@ class Perception:
                                                         * rain)
         return factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0), glare, factor
 
+    def _edge_opacity(self) -> np.ndarray:
+        """(N, 1, 1, E) how much each area edge hides what is behind it (0 for an area a variant
+        disabled); fixed for a run, computed once."""
+        if self._opacity is None:
+            w = self.world
+            enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
+            opacity = np.where(self.edge_weight_kind == 0, 1.0,
+                               self.p["vegetation_opacity"][:, None])  # (N, E)
+            self._opacity = np.where(enabled, opacity, 0.0)[:, None, None, :]
+        return self._opacity
+
     def _visibility(self, ex: np.ndarray, ey: np.ndarray, gt: ObstacleFrame) -> np.ndarray:
         """Visible fraction of each obstacle (N, M) from three sample points."""
         w = self.world
@@ -164,10 +177,7 @@ class Perception:
         px = np.stack([gt.x, gt.x + hl * c, gt.x - hl * c], -1)  # (N, M, 3)
         py = np.stack([gt.y, gt.y + hl * s, gt.y - hl * s], -1)
         crosses = segments_blocked(ex[:, None, None], ey[:, None, None], px, py, w.area_edges)
-        enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
-        opacity = np.where(self.edge_weight_kind == 0, 1.0,
-                           self.p["vegetation_opacity"][:, None])  # (N, E)
-        block = np.where(crosses & enabled[:, None, None, :], opacity[:, None, None, :], 0.0)
+        block = np.where(crosses, self._edge_opacity(), 0.0)
         return (1.0 - block.max(axis=-1)).mean(axis=-1)
 
     # -- the step -----------------------------------------------------------------------------
@@ -341,17 +351,32 @@ def ground_truth(world: BatchWorld, ax: np.ndarray, ay: np.ndarray, ayaw: np.nda
                  ) -> ObstacleFrame:
     """Stack actor states (N, A) and the map objects into obstacle slots (N, A + E)."""
     cat = np.concatenate
+    fixed = _fixed_slots(world)
     return ObstacleFrame(
         x=cat([ax, world.object_pos[..., 0]], 1), y=cat([ay, world.object_pos[..., 1]], 1),
-        yaw=cat([ayaw, world.object_yaw], 1),
-        length=cat([world.actor_dims[..., 0], world.object_dims[..., 0]], 1),
-        width=cat([world.actor_dims[..., 1], world.object_dims[..., 1]], 1),
-        height=cat([world.actor_dims[..., 2], world.object_dims[..., 2]], 1),
-        kind=cat([world.actor_kind, world.object_kind], 1),
-        model=cat([world.actor_model, np.full(world.object_kind.shape, -1)], 1),
-        rgb=cat([world.actor_rgb, np.broadcast_to(np.array([0.95, 0.45, 0.05]),
-                                                  (*world.object_kind.shape, 3))], 1),
-        color=cat([world.actor_color, np.full(world.object_kind.shape, 8)], 1),  # orange
+        yaw=cat([ayaw, world.object_yaw], 1), **fixed,
     )
+
+
+_FIXED_SLOTS: weakref.WeakKeyDictionary[BatchWorld, dict[str, np.ndarray]] = (
+    weakref.WeakKeyDictionary())
+
+
+def _fixed_slots(world: BatchWorld) -> dict[str, np.ndarray]:
+    """The obstacle slots' fields no step changes (sizes, kinds, colours), stacked once."""
+    got = _FIXED_SLOTS.get(world)
+    if got is None:
+        cat = np.concatenate
+        got = _FIXED_SLOTS[world] = dict(
+            length=cat([world.actor_dims[..., 0], world.object_dims[..., 0]], 1),
+            width=cat([world.actor_dims[..., 1], world.object_dims[..., 1]], 1),
+            height=cat([world.actor_dims[..., 2], world.object_dims[..., 2]], 1),
+            kind=cat([world.actor_kind, world.object_kind], 1),
+            model=cat([world.actor_model, np.full(world.object_kind.shape, -1)], 1),
+            rgb=cat([world.actor_rgb, np.broadcast_to(np.array([0.95, 0.45, 0.05]),
+                                                      (*world.object_kind.shape, 3))], 1),
+            color=cat([world.actor_color, np.full(world.object_kind.shape, 8)], 1),  # orange
+        )
+    return got
 
 

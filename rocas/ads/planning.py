@@ -89,13 +89,29 @@ class Planning:
         self.prev_track = np.full((n, m), -1, dtype=np.int64)
         self.ego_hl = float(world.ego_dims[0]) / 2
         self.ego_hw = float(world.ego_dims[1]) / 2
-
-    def _col(self, name: str) -> np.ndarray:
-        return self.p[name][:, None]
+        # what no step changes: parameter columns (N, 1), the trajectory's time grid, and the
+        # IDM constraints' layout (obstacle follow gaps, then the stop points)
+        self.cols = {k: v[:, None] for k, v in self.p.items()}
+        p, c = self.p, self.cols
+        self.preview = np.arange(0.0, 80.0, 2.0)[None, :]
+        self.t = np.arange(MAX_POINTS)[None, :] * p["trajectory_time_step_s"][:, None]
+        self.valid = self.t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        self.accel_fade = 1.0 - numerics.exp(-self.t / ACCEL_DECAY_S)  # (N, K)
+        stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
+                                      np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
+                                      np.full((n, 1), R_DEST)], axis=1)
+        self.reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
+        self.smin = np.concatenate([
+            np.broadcast_to(c["follow_distance_m"], (n, m)),
+            np.broadcast_to(c["stop_decision_min_distance_m"], stop_reason.shape)], axis=1)
+        self.headway = np.where(self.reasons == R_YIELD, c["yield_time_headway_s"],
+                                c["follow_time_headway_s"])
+        self.idm_root = (2.0 * np.sqrt(p["max_accel_mps2"] * p["comfort_decel_mps2"]))[:, None]
+        self.rows = np.arange(n)
 
     def step(self, pred: PredictionOutput, per: PerceptionOutput, loc: LocalizationOutput,
              chassis: ChassisOutput) -> PlanningOutput:
-        p, c = self.p, self._col
+        p, c = self.p, self.cols.__getitem__
         road = self.world.road
         n, m = pred.x.shape
         hl_e, hw_e = self.ego_hl, self.ego_hw
@@ -105,7 +121,7 @@ class Planning:
         # every cap ahead (lane limit, junction, curvature) is previewed with a braking profile at
         # half the comfortable deceleration, so a lower cap is approached gently instead of being
         # met by a hard brake where it starts
-        dist = np.arange(0.0, 80.0, 2.0)[None, :]
+        dist = self.preview
         ahead = s0[:, None] + dist
         _, _, _, kap = reference_at(road, ahead)
         ii = road.ref_index(ahead)
@@ -147,7 +163,7 @@ class Planning:
         cost = np.where(feasible, np.abs(cands), np.inf)
         best = np.argmin(cost, axis=1)
         no_path = ~np.isfinite(cost.min(axis=1))
-        target = np.where(no_path, 0.0, cands[np.arange(n), best])
+        target = np.where(no_path, 0.0, cands[self.rows, best])
         blocking = static & (lo_b < 0.0) & (hi_b > 0.0)
         any_block = blocking.any(axis=1)
         first_s = np.min(np.where(blocking, so - lon_ext, np.inf), axis=1, initial=np.inf)
@@ -267,28 +283,22 @@ class Planning:
         stop_dest = np.full(n, road.destination_s_m - p["destination_buffer_m"] - hl_e)
         stops = np.concatenate([stop_yield, stop_vru, stop_block[:, None], stop_light[:, None],
                                 stop_dest[:, None]], axis=1)
-        stop_reason = np.concatenate([np.full((n, m), R_YIELD), np.full((n, m), R_VRU),
-                                      np.full((n, 1), R_BLOCKED), np.full((n, 1), R_LIGHT),
-                                      np.full((n, 1), R_DEST)], axis=1)
         gaps = np.concatenate([gap_follow, stops - s0[:, None]], axis=1)
         leads = np.concatenate([v_lead, np.zeros_like(stops)], axis=1)
-        smin = np.concatenate([np.broadcast_to(c("follow_distance_m"), (n, m)),
-                               np.broadcast_to(c("stop_decision_min_distance_m"), stops.shape)],
-                              axis=1)
-        reasons = np.concatenate([np.full((n, m), R_FOLLOW), stop_reason], axis=1)
-        amax, bcomf = p["max_accel_mps2"], p["comfort_decel_mps2"]
+        smin, reasons = self.smin, self.reasons
+        amax = p["max_accel_mps2"]
         a_free = amax * (1.0 - numerics.power(v0 / np.maximum(v_cruise, 0.1), p["idm_exponent"]))
-        headway = np.where(reasons == R_YIELD, c("yield_time_headway_s"), c("follow_time_headway_s"))
+        headway = self.headway
         sstar = smin + np.maximum(0.0, v0[:, None] * headway + v0[:, None]
-                                  * (v0[:, None] - leads) / (2.0 * np.sqrt(amax * bcomf))[:, None])
+                                  * (v0[:, None] - leads) / self.idm_root)
         active = np.isfinite(gaps)
         a_c = np.where(active, a_free[:, None] - amax[:, None] * (
             sstar / np.maximum(np.where(active, gaps, 1.0), 0.1)) ** 2, inf)
         binding = np.argmin(a_c, axis=1)
         a_cmd = np.minimum(a_free, a_c.min(axis=1))
         bound = np.isfinite(a_c.min(axis=1)) & (a_c.min(axis=1) < a_free)
-        reason = np.where(bound, reasons[np.arange(n), binding], R_CRUISE)
-        bind_gap = np.where(bound, gaps[np.arange(n), binding], inf)
+        reason = np.where(bound, reasons[self.rows, binding], R_CRUISE)
+        bind_gap = np.where(bound, gaps[self.rows, binding], inf)
         # hold behind a vehicle beside the path: the closing speed is capped so that the ego,
         # braking at the comfortable deceleration, ends at the vehicle's speed a standstill gap
         # plus a yield headway behind its rear (late, unlike IDM's following); never harder
@@ -323,9 +333,7 @@ class Planning:
         estop_reason = np.where(pbrake, E_PERCEPTION_BRAKE, estop_reason)
         reason = np.where(pbrake, R_PBRAKE, reason)
         # --- trajectory and collision check ---------------------------------------------------
-        k = np.arange(MAX_POINTS)
-        t = k[None, :] * p["trajectory_time_step_s"][:, None]
-        valid = t <= p["trajectory_horizon_s"][:, None] + 1e-9
+        t, valid = self.t, self.valid
         vcap = np.maximum(v_cruise, v0)
         traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # collision check at the forecast times (and now): ego trajectory vs obstacles
@@ -333,20 +341,28 @@ class Planning:
         tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
             tp <= c("collision_check_horizon_s")) & (tp <= p["trajectory_horizon_s"][:, None])
         ex, ey, eh, es = self._sample(traj, t, tp)
-        ox = np.concatenate([pred.x[..., None], pred.traj_x], axis=-1)
-        oy = np.concatenate([pred.y[..., None], pred.traj_y], axis=-1)
-        oh = np.where(tangent, np.concatenate([head_now[..., None], pred.traj_heading], -1),
-                      pred.heading[..., None])
-        gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
-                      ox, oy, oh, hl_o[..., None], hw_o[..., None])
-        thr = np.where(pred.is_static, c("collision_check_static_m"),
-                       c("collision_check_moving_m"))
-        hit = (consider | mov)[..., None] & tcheck[:, None, :] & (gap < thr[..., None])
-        hit_k = hit.any(axis=1)
+        # only slots some variant considers are checked (the others' gaps would be discarded)
+        checked = consider | mov
+        cols = np.flatnonzero(checked.any(axis=0))
+        if cols.size:
+            sub = (slice(None), cols)
+            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[sub]], axis=-1)
+            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[sub]], axis=-1)
+            oh = np.where(tangent, np.concatenate([head_now[sub][..., None],
+                                                   pred.traj_heading[sub]], -1),
+                          pred.heading[sub][..., None])
+            gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
+                          ox, oy, oh, hl_o[sub][..., None], hw_o[sub][..., None])
+            thr = np.where(pred.is_static[sub], c("collision_check_static_m"),
+                           c("collision_check_moving_m"))
+            hit = checked[sub][..., None] & tcheck[:, None, :] & (gap < thr[..., None])
+            hit_k = hit.any(axis=1)
+        else:
+            hit_k = np.zeros(tcheck.shape, dtype=bool)
         collide = hit_k.any(axis=1)
         k_hit = np.argmax(hit_k, axis=1)
-        t_hit = tp[np.arange(n), k_hit]
-        s_hit = es[np.arange(n), k_hit]
+        t_hit = tp[self.rows, k_hit]
+        s_hit = es[self.rows, k_hit]
         imminent = collide & (t_hit < p["estop_ttc_s"])
         fallback = collide & ~imminent
         a_fb = -v0 * v0 / (2.0 * np.maximum(s_hit - s0 - 1.0, 0.3))
@@ -406,7 +422,7 @@ class Planning:
                     t: np.ndarray, offset_at) -> tuple[np.ndarray, ...]:  # noqa: ANN001
         road = self.world.road
         a = a_cmd[:, None]
-        v_acc = v0[:, None] + a * ACCEL_DECAY_S * (1.0 - numerics.exp(-t / ACCEL_DECAY_S))
+        v_acc = v0[:, None] + a * ACCEL_DECAY_S * self.accel_fade
         v_dec = v0[:, None] + a * t
         v = clip(np.where(a > 0, v_acc, v_dec), 0.0, vcap[:, None])
         dt = np.diff(t, axis=1)
@@ -417,9 +433,20 @@ class Planning:
         d = offset_at(s)
         x = rx - d * np.sin(rh)
         y = ry + d * np.cos(rh)
-        dd = np.gradient(d, axis=1) / np.maximum(np.gradient(s, axis=1), 1e-3)
+        dd = _row_gradient(d) / np.maximum(_row_gradient(s), 1e-3)
         th = wrap_angle(rh + numerics.arctan(dd))
         return x, y, th, rk, s, v, acc
+
+
+def _row_gradient(a: np.ndarray) -> np.ndarray:
+    """``np.gradient(a, axis=1)`` for (N, K >= 2) rows of unit spacing, with the same
+    arithmetic (central differences halved, one-sided ones at the ends) and none of its
+    Python overhead."""
+    out = np.empty_like(a)
+    out[:, 1:-1] = (a[:, 2:] - a[:, :-2]) / 2.0
+    out[:, 0] = a[:, 1] - a[:, 0]
+    out[:, -1] = a[:, -1] - a[:, -2]
+    return out
 
 
 __all__ = ["MAX_POINTS", "REASONS", "Planning", "PlanningOutput", "REF_SPACING_M"]

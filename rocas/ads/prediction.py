@@ -86,7 +86,15 @@ def perceived_world_state(per: PerceptionOutput) -> tuple[np.ndarray, ...]:
 class Prediction:
     def __init__(self, world: BatchWorld, params: dict[str, np.ndarray]) -> None:
         self.world = world
-        self.p = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("prediction.")}
+        self.p = p = {k.split(".", 1)[1]: v for k, v in params.items()
+                      if k.startswith("prediction.")}
+        # the forecast's time grid (N, K) and its fading factors (N, 1, K): fixed for a run
+        self.t = np.arange(1, MAX_POINTS + 1)[None, :] * p["time_step_s"][:, None]
+        self.valid = self.t <= p["horizon_s"][:, None] + 1e-9
+        tt = self.t[:, None, :]
+        self.accel_tau = p["accel_decay_s"][:, None, None]
+        self.accel_fade = 1.0 - numerics.exp(-tt / self.accel_tau)
+        self.lane_fade = numerics.exp(-tt / p["lane_follow_convergence_s"][:, None, None])
 
     def step(self, per: PerceptionOutput, loc: LocalizationOutput) -> PredictionOutput:
         p = self.p
@@ -105,9 +113,7 @@ class Prediction:
                      | (np.hypot(rel_x, rel_y) > p["max_distance_m"][:, None])
                      | (rel_x < -p["behind_ignore_m"][:, None]))
         # time grid
-        k = np.arange(1, MAX_POINTS + 1)
-        t = k[None, :] * p["time_step_s"][:, None]  # (N, K)
-        valid = t <= p["horizon_s"][:, None] + 1e-9
+        t, valid = self.t, self.valid  # (N, K)
         dir_ = np.where(speed > 0.05, numerics.arctan2(vy, vx), heading)
         # lane matching and intents, for every slot
         q, d2 = nearest_on(road.lane_grid, x, y)
@@ -165,11 +171,10 @@ class Prediction:
         # longitudinal motion with a fading acceleration
         along = np.where(speed > 0.05, (ax * vx + ay * vy) / np.maximum(speed, 1e-6), 0.0)
         acc = clip(along, -p["max_accel_mps2"][:, None], p["max_accel_mps2"][:, None])
-        tau = p["accel_decay_s"][:, None, None]
         tt = t[:, None, :]
         vmax = np.where(ped, p["pedestrian_max_speed_mps"][:, None], p["max_speed_mps"][:, None])
         v0 = np.minimum(speed, vmax)
-        v_k = clip(v0[..., None] + acc[..., None] * tau * (1.0 - numerics.exp(-tt / tau)), 0.0,
+        v_k = clip(v0[..., None] + acc[..., None] * self.accel_tau * self.accel_fade, 0.0,
                    vmax[..., None])
         dt_k = p["time_step_s"][:, None, None]
         dist_k = np.cumsum(0.5 * (v_k + np.concatenate([v0[..., None], v_k[..., :-1]], -1))
@@ -192,8 +197,7 @@ class Prediction:
         offy = y - road.lane_points[q, 1]
         lat0 = -offx * np.sin(lane_h) + offy * np.cos(lane_h)
         # vehicles converge to the lane centre; cyclists keep their offset (they ride the edge)
-        lat = lat0[..., None] * np.where(bike[..., None], 1.0, numerics.exp(
-            -tt / p["lane_follow_convergence_s"][:, None, None]))
+        lat = lat0[..., None] * np.where(bike[..., None], 1.0, self.lane_fade)
         lf_x = p0[..., 0] + u * (p1[..., 0] - p0[..., 0]) - lat * np.sin(lf_h)
         lf_y = p0[..., 1] + u * (p1[..., 1] - p0[..., 1]) + lat * np.cos(lf_h)
         # cut-in: forward motion plus a lateral motion toward and across the ego's path

@@ -9,6 +9,7 @@ Cyclists and pedestrians are points moved along their path.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,7 @@ from rocas.sim.dynamics import (
     VehicleState,
     bicycle_step,
     path_point,
+    path_rows,
     profile_speed,
 )
 from rocas.sim.geometry import clip, wrap_angle
@@ -94,6 +96,45 @@ def initial_actors(world: BatchWorld) -> ActorState:
                       VehicleState(x, y, h, h.copy(), v))
 
 
+@dataclass(frozen=True, eq=False)
+class _Statics:
+    """What :func:`step_actors` reads from a world that no step changes (computed once)."""
+
+    ahead: np.ndarray       # (N, A) front axle ahead of the centre [m]
+    wheelbase: np.ndarray   # (N, A) [m]
+    back: np.ndarray        # (N, A) rear axle behind the centre [m]
+    is_veh: np.ndarray      # (N, A) bool
+    grip: np.ndarray        # (N, A) lateral grip factor
+    ds: np.ndarray          # (N, A) path spacing, at least 1e-9 [m]
+    not_self: np.ndarray    # (1, A, A + 1) bool: other road users (actors, then the ego)
+    lat_reach: np.ndarray   # (N, A, A + 1) lateral distance within which another is ahead [m]
+    lon_reach: np.ndarray   # (N, A, A + 1) centre distance of two touching bodies [m]
+    rows: np.ndarray        # (N, 1) batch index
+    path_rows: np.ndarray   # (N, A, 1) first sample of each path in the flattened paths
+
+
+_STATICS: weakref.WeakKeyDictionary[BatchWorld, _Statics] = weakref.WeakKeyDictionary()
+
+
+def _statics(world: BatchWorld) -> _Statics:
+    got = _STATICS.get(world)
+    if got is None:
+        n, a = world.actor_kind.shape
+        ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
+        ol = np.concatenate([world.actor_dims[..., 0], np.full((n, 1), world.ego_dims[0])], 1)
+        ow = np.concatenate([world.actor_dims[..., 1], np.full((n, 1), world.ego_dims[1])], 1)
+        got = _Statics(
+            ahead=ahead, wheelbase=wb, back=wb - ahead, is_veh=world.actor_kind == KIND_VEHICLE,
+            grip=LATERAL_GRIP_FACTOR[clip(world.actor_model, 0, 3)],
+            ds=np.maximum(world.actor_path_ds, 1e-9),
+            not_self=~np.eye(a, a + 1, dtype=bool)[None],
+            lat_reach=(world.actor_dims[..., 1:2] + ow[:, None, :]) / 2 + 0.3,
+            lon_reach=(world.actor_dims[..., 0:1] + ol[:, None, :]) / 2,
+            rows=np.arange(n)[:, None], path_rows=path_rows(world.actor_path)[..., None])
+        _STATICS[world] = got
+    return got
+
+
 def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleState,
                 friction: np.ndarray) -> ActorState:
     """Advance every actor by one step (decide, then integrate)."""
@@ -103,26 +144,23 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     n, a = b.x.shape
     if a == 0:
         return state
+    st = _statics(world)
     v_target = profile_speed(t, world.actor_profile_t, world.actor_profile_v)
     accel = clip(SPEED_GAIN_PER_S * (v_target - b.speed), -ACTOR_DECEL_MPS2, ACTOR_ACCEL_MPS2)
     # reactive actors keep a distance to the ego and to other actors ahead
     ox = np.concatenate([b.x, ego.x[:, None]], 1)
     oy = np.concatenate([b.y, ego.y[:, None]], 1)
     ov = np.concatenate([b.speed, ego.speed[:, None]], 1)
-    ol = np.concatenate([world.actor_dims[..., 0], np.full((n, 1), world.ego_dims[0])], 1)
-    ow = np.concatenate([world.actor_dims[..., 1], np.full((n, 1), world.ego_dims[1])], 1)
     c, s = np.cos(b.yaw)[..., None], np.sin(b.yaw)[..., None]
     dx = ox[:, None, :] - b.x[..., None]
     dy = oy[:, None, :] - b.y[..., None]
     lon = dx * c + dy * s
     lat = -dx * s + dy * c
-    not_self = ~np.eye(a, a + 1, dtype=bool)[None]
-    ahead = not_self & (lon > 0) & (np.abs(lat) < (world.actor_dims[..., 1:2] + ow[:, None, :])
-                                    / 2 + 0.3)
-    gap = np.where(ahead, lon - (world.actor_dims[..., 0:1] + ol[:, None, :]) / 2, np.inf)
+    ahead = st.not_self & (lon > 0) & (np.abs(lat) < st.lat_reach)
+    gap = np.where(ahead, lon - st.lon_reach, np.inf)
     j = np.argmin(gap, axis=-1)
     g = gap.min(axis=-1)
-    v_lead = ov[np.arange(n)[:, None], j]
+    v_lead = ov[st.rows, j]
     sstar = world.actor_reactive_gap + np.maximum(
         0.0, b.speed * REACTIVE_HEADWAY_S + b.speed * (b.speed - v_lead)
         / (2 * np.sqrt(ACTOR_ACCEL_MPS2 * 3.0)))
@@ -130,38 +168,33 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     accel = np.where(world.actor_reactive & np.isfinite(g),
                      np.maximum(np.minimum(accel, idm), -ACTOR_DECEL_MPS2), accel)
     # vehicles: pure pursuit through the bicycle model
-    ds = np.maximum(world.actor_path_ds, 1e-9)
+    ds = st.ds
     tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds,
                            state.s + pursuit_lookahead(fa.speed))
     kappa = pursuit_curvature(fa.x, fa.y, fa.yaw, tx, ty)
-    grip = LATERAL_GRIP_FACTOR[clip(world.actor_model, 0, 3)]
-    veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], grip, dt)
+    veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], st.grip, dt)
     # project vehicles back on their path (local window)
     p = world.actor_path.shape[2]
     cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, p - 1)
-    rn = np.arange(n)[:, None, None]
-    ra = np.arange(a)[None, :, None]
-    pts = world.actor_path[rn, ra, cand]  # (N, A, W, 2)
+    pts = world.actor_path.reshape(-1, 2)[st.path_rows + cand]  # (N, A, W, 2)
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
-    v_idx = cand[rn[..., 0], ra[..., 0], best]
+    v_idx = np.take_along_axis(cand, best[..., None], -1)[..., 0]
     # points: move along the path
     v_pt = np.maximum(fa.speed + accel * dt, 0.0)
     s_pt = state.s + 0.5 * (b.speed + v_pt) * dt
     px2, py2, ph2 = path_point(world.actor_path, world.actor_path_heading, ds, s_pt)
-    is_veh = world.actor_kind == KIND_VEHICLE
+    is_veh = st.is_veh
     guide = VehicleState(
         x=np.where(is_veh, veh.x, px2), y=np.where(is_veh, veh.y, py2),
         yaw=np.where(is_veh, veh.yaw, ph2), course=np.where(is_veh, veh.course, ph2),
         speed=np.where(is_veh, veh.speed, v_pt))
     # the body trails the front axle (points: the body is the guide)
-    ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
     # (a vehicle's body ``course`` holds its trailing axis, rear axle -> front axle; its
     # ``yaw`` adds the front axle's slip, so a sliding vehicle's body points inside its motion)
-    back = wb - ahead
-    rear_x = b.x - back * np.cos(b.course)
-    rear_y = b.y - back * np.sin(b.course)
-    bx, by, byaw = trail_body(guide.x, guide.y, rear_x, rear_y, guide.yaw, ahead, wb)
+    rear_x = b.x - st.back * np.cos(b.course)
+    rear_y = b.y - st.back * np.sin(b.course)
+    bx, by, byaw = trail_body(guide.x, guide.y, rear_x, rear_y, guide.yaw, st.ahead, st.wheelbase)
     slip = np.where(is_veh, wrap_angle(guide.yaw - guide.course), 0.0)
     body = VehicleState(x=bx, y=by, yaw=np.where(slip != 0.0, wrap_angle(byaw + slip), byaw),
                         course=np.where(is_veh, byaw, guide.course), speed=guide.speed)

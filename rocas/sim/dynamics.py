@@ -6,6 +6,7 @@ functions only integrate them. All functions are vectorised over any leading sha
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,12 @@ class VehicleState:
     yaw: np.ndarray
     course: np.ndarray
     speed: np.ndarray
+
+
+@functools.cache
+def _slip_decay(dt: float) -> float:
+    """Factor by which slip decays over one step of ``dt`` [s] while the tyres grip."""
+    return numerics.exp(-dt / SLIP_RELAX_S)
 
 
 def bicycle_step(
@@ -71,7 +78,7 @@ def bicycle_step(
     course = state.course + v_mid * kappa_eff * dt
     slip = wrap_angle(state.yaw - state.course) + v_mid * (curvature - kappa_eff) * dt
     slip = np.where(sliding, clip(slip, -MAX_SLIP_RAD, MAX_SLIP_RAD),
-                    slip * numerics.exp(-dt / SLIP_RELAX_S))
+                    slip * _slip_decay(dt))
     mid_course = 0.5 * (state.course + course)
     x = state.x + v_mid * np.cos(mid_course) * dt
     y = state.y + v_mid * np.sin(mid_course) * dt
@@ -100,10 +107,17 @@ def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndar
     f = clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    n, a = s.shape
-    rn = np.arange(n)[:, None]
-    ra = np.arange(a)[None, :]
-    p0 = path[rn, ra, i]
-    p1 = path[rn, ra, i + 1]
+    # one gather on the flattened paths: indexing with three broadcast index arrays costs
+    # several times as much on a large batch
+    k = path_rows(path) + i
+    flat = path.reshape(-1, 2)
+    p0 = flat[k]
+    p1 = flat[k + 1]
     return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
-            heading[rn, ra, i])
+            heading.reshape(-1)[k])
+
+
+def path_rows(path: np.ndarray) -> np.ndarray:
+    """(N, A) index of each path's first sample in ``path.reshape(-1, 2)`` (path (N, A, P, 2))."""
+    n, a, p = path.shape[:3]
+    return np.arange(0, n * a * p, p).reshape(n, a)

@@ -112,6 +112,14 @@ class RoadGeometry:
     def ref_index(self, s: np.ndarray) -> np.ndarray:
         return clip((s / REF_SPACING_M).astype(np.int64), 0, self.ref_points.shape[0] - 1)
 
+    @functools.cached_property
+    def ref_table(self) -> np.ndarray:
+        """(R, 8) per reference point: x, y, heading, curvature, the next point's x and y (the
+        last point's own), cos and sin of the heading; one gather reads all of them."""
+        nxt = np.vstack([self.ref_points[1:], self.ref_points[-1:]])
+        return np.column_stack([self.ref_points, self.ref_heading, self.ref_kappa, nxt,
+                                np.cos(self.ref_heading), np.sin(self.ref_heading)])
+
 
 @functools.lru_cache(maxsize=16)
 def road_geometry(lanes: tuple[Lane, ...], route: tuple[str, ...], start_s_m: float,
@@ -433,10 +441,8 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     last = road.ref_points.shape[0] - 1
     far = idx > last
     idx = np.minimum(idx, last)
-    rx = road.ref_points[idx, 0]
-    ry = road.ref_points[idx, 1]
-    h = road.ref_heading[idx]
-    c, s = np.cos(h), np.sin(h)
+    row = road.ref_table[idx]
+    rx, ry, c, s = row[..., 0], row[..., 1], row[..., 6], row[..., 7]
     dx, dy = x - rx, y - ry
     lateral = -dx * s + dy * c
     lateral = np.where(far, np.where(lateral < 0.0, -FAR_LATERAL_M, FAR_LATERAL_M), lateral)
@@ -450,7 +456,6 @@ def reference_at(road: RoadGeometry, s: np.ndarray
     f = clip(s / REF_SPACING_M, 0.0, r - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    p0 = road.ref_points[i]
-    p1 = road.ref_points[i + 1]
-    return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
-            road.ref_heading[i], road.ref_kappa[i])
+    row = road.ref_table[i]
+    x0, y0 = row[..., 0], row[..., 1]
+    return (x0 + u * (row[..., 4] - x0), y0 + u * (row[..., 5] - y0), row[..., 2], row[..., 3])
