@@ -37,15 +37,14 @@ def answer(report: dict) -> str:
     return f"{report.get('verdict')}:{report.get('deviating_module')}:{params or '-'}"
 
 
-def analyze_once(recording: Path, extra: list[str], pythonpath: str | None
+def analyze_once(recording: Path, extra: list[str], pythonpath: str
                  ) -> tuple[float, float, float, dict]:
     with tempfile.TemporaryDirectory() as tmp:
         argv = [sys.executable, "-m", "rocas", "analyze", str(recording), "--out",
                 str(Path(tmp) / "run"), "--json", *extra]
-        env = None
-        if pythonpath:
-            env = {**os.environ, "PYTHONPATH": pythonpath}
-        wall, cpu, rss, out = run_child(argv, env=env)
+        # `python -m` puts the working directory first on sys.path: run in the side's checkout
+        env = {**os.environ, "PYTHONPATH": pythonpath}
+        wall, cpu, rss, out = run_child(argv, env=env, cwd=pythonpath)
         return wall, cpu, rss, json.loads(out)
 
 
@@ -66,13 +65,18 @@ def main() -> None:
         extra += ["--workers", str(args.workers)]
     if args.validation is not None:
         extra += ["--validation", str(args.validation)]
-    sides: dict[str, str | None] = {"current": str(ROOT)}
+    sides: dict[str, str] = {"current": str(ROOT)}
     worktree = None
     if args.baseline:
         worktree = Path(tempfile.mkdtemp(prefix="rocas-baseline-"))
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
                         args.baseline], check=True, capture_output=True)
         sides = {"baseline": str(worktree), "current": str(ROOT)}
+    for side, path in sides.items():  # each side must import its own code
+        where = subprocess.run([sys.executable, "-c", "import rocas; print(rocas.__file__)"], cwd=path,
+                               env={**os.environ, "PYTHONPATH": path}, capture_output=True, text=True)
+        if not where.stdout.strip().startswith(path):
+            raise SystemExit(f"{side}: rocas imported from {where.stdout.strip()!r}, not {path}")
     runs: dict[str, dict[str, list[tuple[float, float, float]]]] = {s: {} for s in sides}
     answers: dict[str, dict[str, str]] = {s: {} for s in sides}
     try:
