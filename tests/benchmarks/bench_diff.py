@@ -54,12 +54,13 @@ print(n)
 """
 
 
-def run_child(argv: list[str]) -> tuple[float, float, float, str]:
+def run_child(argv: list[str], env: dict[str, str] | None = None, cwd: str | None = None
+              ) -> tuple[float, float, float, str]:
     """Run one child process to its end: (wall [s], CPU user + system [s], peak RSS [MB],
     stdout). Raises if it fails. The child's own resource usage comes from ``wait4``."""
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         t = time.perf_counter()
-        proc = subprocess.Popen(argv, stdout=out, stderr=err)
+        proc = subprocess.Popen(argv, stdout=out, stderr=err, env=env, cwd=cwd)
         _, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - t
         proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen

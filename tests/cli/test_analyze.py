@@ -238,3 +238,17 @@ def test_the_interrupt_message_says_what_is_on_disk(rocas, monkeypatch, tmp_path
     assert cli.kept_after_interrupt(run, None) == (
         f"finished phases (replay) and checkpoints of the phase under way (physical.ckpt) are kept in {run}; "
         "continue with --resume")
+
+
+def test_the_answer_is_said_before_the_validation_checks_it():
+    import io
+
+    from rocas.cli.analyze import _Progress
+    from rocas.cli.console import Env
+
+    err = io.StringIO()
+    with _Progress(Env(stdout=io.StringIO(), stderr=err), {"validation": 8}) as p:
+        p("cyber", {})
+        p("answer", {"module": "perception", "fix": "perception.brake_threshold 0.8 -> 0.8564"})
+        assert "found: perception misconfigured, perception.brake_threshold 0.8 -> 0.8564" in err.getvalue()
+        assert [t.description for t in p._p.tasks] == ["cyber"]  # not a phase with a bar of its own

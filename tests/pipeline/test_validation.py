@@ -97,6 +97,8 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
     counts = []
 
     def stop_in_validation(phase, info):
+        if phase == "answer":  # said once, before phase V's first count
+            counts.append(info)
         if phase == "validation":
             counts.append(info.get("evaluations"))
             if info.get("evaluations", 0) >= 13:
@@ -106,6 +108,8 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
         analyze(red_truck, out, cfg, executor=SerialExecutor(), progress=stop_in_validation)
     # slices of 8: the 5 stronger values on the accident, then the 24 variant runs of the
     # original and the minimal fix
+    answer, *counts = counts
+    assert answer["module"] == "perception" and answer["fix"].startswith("perception.")
     assert counts == [0, 5, 13]
     assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 13
 
