@@ -126,6 +126,12 @@ class Actuation:
 
 #: (topic, message, log time [ns]) -> None
 MessageSink = Callable[[str, Any, int], None]
+#: replay's view of the ego at one time: (t [s], x [m], y [m], yaw [rad], speed [m/s],
+#: longitudinal acceleration [m/s^2])
+PoseRow = tuple[float, float, float, float, float, float]
+#: one perceived agent at one time, world frame: (t [s], track id, x, y [m], heading [rad],
+#: vx, vy [m/s], length, width, height [m], kind ("vehicle", "bicycle", "pedestrian"), colour)
+AgentRow = tuple[float, int, float, float, float, float, float, float, float, float, str, str]
 
 
 @runtime_checkable
@@ -160,6 +166,13 @@ class Stack(Protocol):
         """A run for the compiled world (``rocas.sim.world.BatchWorld``, N variants) with
         every parameter as an (N,) array (:func:`batch_params`)."""
         ...
+
+
+#: Optional, for ``rocas analyze`` on a stack's recordings: a stack may define
+#: ``read_motion(recording) -> (list[PoseRow], list[AgentRow])`` reading its own ego and
+#: perception channels from an open :class:`rocas.recording.reader.Recording` (one pass);
+#: and ``braking_limits`` / ``sensing_limits`` (parameter names) that the cyber search must
+#: not lower (a "fix" that brakes or senses less only hides the accident).
 
 
 class StackParams(Mapping[str, float]):

@@ -230,3 +230,69 @@ def outcome_metadata(o: Outcome) -> dict[str, str]:
         "min_separation_m": repr(o.min_separation_m),
         "route_completion": repr(o.route_completion),
     }
+
+
+# -- by the scenario's stack: what the pipeline calls ------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SingleRun:
+    """One run of :func:`simulate`: the outcome, (T + 1,) times [s], (T + 1, 5) ego, (T + 1, A,
+    4) actors, (T + 1,) min_gap [m], the recording written (or None) and its message count."""
+
+    outcome: Outcome
+    times: np.ndarray
+    ego: np.ndarray
+    actors: np.ndarray
+    min_gap: np.ndarray
+    recording: str | None
+    messages: int
+
+
+def _merged(scenario: Scenario, params: Mapping[str, float] | None) -> dict[str, float]:
+    """The scenario's own overrides with ``params`` on top (as the engine merges them)."""
+    return {**scenario.ego.overrides, **dict(params or {})}
+
+
+def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
+             seed: int | None = None, *, output: str | os.PathLike[str] | None = None
+             ) -> SingleRun:
+    """One run with the stack the scenario names (``scenario.ego.stack``): the built-in ADS
+    through :func:`rocas.sim.engine.simulate`, any other registered stack through
+    :func:`rollout`; ``params`` go on top of the scenario's own overrides."""
+    if scenario.ego.stack == "ads":
+        from rocas.sim.engine import simulate as simulate_ads
+
+        r = simulate_ads(scenario, params or None, seed, output=output)
+        return SingleRun(r.outcome, r.times, r.ego, r.actors, r.min_gap, r.recording,
+                         r.messages)
+    from rocas.stacks.registry import get_stack
+
+    r = rollout(get_stack(scenario.ego.stack), scenario, _merged(scenario, params), seed,
+                output=output)  # the recording writer writes atomically
+    return SingleRun(r.outcomes[0], r.times, r.ego[0], r.actors[0], r.min_gap[0],
+                     r.recording, r.messages)
+
+
+def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float]],
+                   seeds: Sequence[int]) -> Rollout:
+    """N variants of one scenario structure with the stack they name (all the same); the
+    built-in ADS through :func:`rocas.sim.engine.simulate_batch`. Returns the fields the
+    searches read (times, ego, actors, min_gap, outcomes)."""
+    stacks = {s.ego.stack for s in scenarios}
+    if len(stacks) != 1:
+        raise UsageError(f"one batch mixes stacks {sorted(stacks)}",
+                         "batch variants of one scenario only")
+    (name,) = stacks
+    if name == "ads":
+        from rocas.sim.engine import simulate_batch as simulate_batch_ads
+
+        r = simulate_batch_ads(list(scenarios), params=[dict(p) for p in params],
+                               seeds=list(seeds))
+        return Rollout(times=r.times, ego=r.ego, actors=r.actors, min_gap=r.min_gap,
+                       outcomes=r.outcomes, digests={}, actor_ids=r.actor_ids)
+    from rocas.stacks.registry import get_stack
+
+    return rollout_batch(get_stack(name), list(scenarios),
+                         [_merged(s, p) for s, p in zip(scenarios, params, strict=True)],
+                         list(seeds))

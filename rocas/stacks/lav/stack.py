@@ -46,9 +46,20 @@ class LavStack:
     modules: tuple[str, ...] = MODULES
     channels: tuple[ChannelSpec, ...] = CHANNELS
 
+    #: a cyber search may not lower these (a "fix" that brakes or senses less hides the accident)
+    braking_limits: tuple[str, ...] = ("controller.max_brake_decel_mps2",)
+    sensing_limits: tuple[str, ...] = ("pnp.lidar_range_m", "brake.camera_range_m",
+                                       "brake.camera_fov_deg", "pnp.forecast_horizon_s")
+
     @property
     def parameters(self) -> tuple[ParamSpec, ...]:
         return parameters()
+
+    def read_motion(self, recording: Any) -> tuple[list[Any], list[Any]]:
+        """Replay's input from a recording of this stack (:mod:`rocas.stacks.lav.replay_io`)."""
+        from rocas.stacks.lav.replay_io import read_motion
+
+        return read_motion(recording)
 
     def build(self, world: BatchWorld, params: Mapping[str, np.ndarray]) -> LavRun:
         return LavRun(world, params)
