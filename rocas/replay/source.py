@@ -21,11 +21,11 @@ from rocas.ads.topics import (
     TOPIC_POSE,
     WORLD_ATTACHMENT,
 )
-from rocas.stacks.base import STACK_METADATA
 from rocas.errors import RecordingError
 from rocas.msgs import localization_pb2, perception_pb2
 from rocas.recording.reader import ChannelInfo, open_recording
 from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
+from rocas.stacks.base import STACK_METADATA
 
 _NS = 1e-9
 #: PerceptionObstacle.Type codes (perception.proto).

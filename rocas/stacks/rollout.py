@@ -296,3 +296,23 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
     return rollout_batch(get_stack(name), list(scenarios),
                          [_merged(s, p) for s, p in zip(scenarios, params, strict=True)],
                          list(seeds))
+
+
+def with_stack(scenario: Scenario, name: str) -> Scenario:
+    """``scenario`` driven by the registered stack ``name`` (``--stack NAME``).
+
+    Raises:
+        UsageError: no such stack, or the scenario overrides parameters of another stack.
+    """
+    import dataclasses
+
+    from rocas.stacks.registry import get_stack
+
+    if name == scenario.ego.stack:
+        return scenario
+    get_stack(name)  # refuses an unknown name
+    if scenario.ego.params:
+        raise UsageError(f"scenario {scenario.name} sets parameters of stack "
+                         f"{scenario.ego.stack!r}, which stack {name!r} does not have",
+                         "remove its [ego.params] or give --stack its own scenario")
+    return dataclasses.replace(scenario, ego=dataclasses.replace(scenario.ego, stack=name))
