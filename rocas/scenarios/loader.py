@@ -333,8 +333,8 @@ def _params(ctx: _Ctx, d: Any, key: str, stack: str = "ads") -> tuple[tuple[str,
         for name, value in table.items():
             full = f"{module}.{name}"
             if full not in PARAMETERS:
-                raise ctx.fail(f"{key}.{full}", f"unknown parameter of stack {stack!r} "
-                               "(see 'rocas params')")
+                what = "ADS parameter" if stack == "ads" else f"parameter of stack {stack!r}"
+                raise ctx.fail(f"{key}.{full}", f"unknown {what} (see 'rocas params')")
             p = PARAMETERS[full]
             flat[full] = _num(ctx, value, f"{key}.{full}", p.low, p.high)
     return tuple(sorted(flat.items()))
