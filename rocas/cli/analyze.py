@@ -42,6 +42,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="accident recording (or a scenario file / example name with --scenario)")
     p.add_argument("--scenario", action="store_true",
                    help="SOURCE is a scenario (file or example name) to simulate as the accident")
+    p.add_argument("--stack", metavar="NAME", default=None,
+                   help="with --scenario: the stack that drives the ego (default: the scenario's; "
+                        "a recording names its own)")
     p.add_argument("--out", metavar="RUN_DIR", help="run directory (default: runs/<name>)")
     add_search_arguments(p)
     p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
@@ -70,8 +73,17 @@ def run(args: argparse.Namespace, env: Env) -> int:
         from rocas.scenarios import resolve_scenario
 
         source: Any = resolve_scenario(args.source)
+        if args.stack is not None:
+            from rocas.stacks.rollout import with_stack
+
+            source = with_stack(source, args.stack)
         name = source.name
     else:
+        if args.stack is not None:
+            from rocas.errors import UsageError
+
+            raise UsageError("--stack goes with --scenario",
+                             "a recording names its stack in its rocas.stack metadata")
         source = Path(args.source)
         if not source.exists():
             from rocas.errors import InputError

@@ -95,7 +95,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     outweigh one reference. Otherwise the chosen reference's answer stands."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.substitution import second_opinion
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     if run.done("confidence"):
         return run.state["done"]["confidence"]
@@ -119,7 +119,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     simulations = len(alternates)
     result: dict[str, Any] = {"answers": answers}
     opinion = None
-    if run.cfg.second_opinion:
+    if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
         simulations += len(opinion.runs) + 1
     majority = agreement([a["module"] for a in answers])["majority"]

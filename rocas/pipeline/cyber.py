@@ -1,4 +1,4 @@
-"""Phase IV: cyber mutation over the ADS parameters (section 5.3)."""
+"""Phase IV: cyber mutation over the stack's parameters (section 5.3)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from rocas.errors import UsageError
 from rocas.search.space import MutationSpace, Variable
 
 
-def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpace:
+def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "ads"
+                ) -> MutationSpace:
     """The parameters of ``module`` (all modules when None) as a mutation space, without the
     :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
     and with the :data:`~rocas.ads.params.SENSING_LIMITS` free to grow only (from their current
@@ -18,16 +19,27 @@ def cyber_space(module: str | None, current: Mapping[str, float]) -> MutationSpa
     Args:
         module: the initial deviating module, or None for ``--scope all``.
         current: the values in force in the accident run (defaults plus overrides).
+        stack: the registered stack whose parameters are searched (another stack names its
+            own braking and sensing limits: ``braking_limits``, ``sensing_limits``).
     """
-    if module is not None and module not in MODULES:
-        raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(MODULES)}")
+    modules, specs, braking, sensing = MODULES, parameters(module), BRAKING_LIMITS, SENSING_LIMITS
+    if stack != "ads":
+        from rocas.stacks.registry import get_stack
+
+        st = get_stack(stack)
+        modules = st.modules
+        specs = tuple(p for p in st.parameters if module is None or p.module == module)
+        braking = frozenset(getattr(st, "braking_limits", ()))
+        sensing = frozenset(getattr(st, "sensing_limits", ()))
+    if module is not None and module not in modules:
+        raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(modules)}")
     out = []
-    for p in parameters(module):
-        if p.full_name in BRAKING_LIMITS:
+    for p in specs:
+        if p.full_name in braking:
             continue
         value = float(current.get(p.full_name, p.default))
         kind = "int" if p.is_integer else "real"
-        low = max(p.low, value) if p.full_name in SENSING_LIMITS else p.low
+        low = max(p.low, value) if p.full_name in sensing else p.low
         out.append(Variable(p.full_name, p.module, kind, int(value) if kind == "int" else value,
                             low=low, high=p.high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
     return MutationSpace(tuple(out))

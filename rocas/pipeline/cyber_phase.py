@@ -21,7 +21,7 @@ from rocas.search.space import Mutation
 
 
 def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     if run.done("cyber"):
         return run.state["done"]["cyber"]

@@ -26,7 +26,7 @@ class VariantTask:
 
     Attributes:
         scenario: the (possibly mutated) scenario.
-        params: ADS parameter overrides on top of the scenario's own.
+        params: the stack's parameter overrides on top of the scenario's own.
         seed: the simulation seed.
     """
 
@@ -51,8 +51,9 @@ class VariantResult:
 
 
 def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
-    """Simulate tasks that share one scenario structure in one batch (picklable entry point)."""
-    from rocas.sim.engine import simulate_batch
+    """Simulate tasks that share one scenario structure in one batch (picklable entry point),
+    with the stack their scenario names."""
+    from rocas.stacks.rollout import simulate_batch
 
     res = simulate_batch([t.scenario for t in tasks], params=[dict(t.params) for t in tasks],
                          seeds=[t.seed for t in tasks])

@@ -94,7 +94,7 @@ def reference_violation(r: VariantResult, needed_m: float) -> float:
 
 
 def phase_physical(run: Run) -> dict[str, Any]:
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     if run.done("physical"):
         return run.state["done"]["physical"]

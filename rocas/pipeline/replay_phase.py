@@ -16,7 +16,7 @@ from rocas.scenarios.model import Scenario
 
 def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) -> None:
     from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     if run.done("replay"):
         try:
@@ -50,6 +50,7 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
                       "recorded_accident": None, "accident": acc.to_json() if acc else None,
                       "ego_rmse_m": 0.0}
         run.scenario = scenario
+        result["stack"] = scenario.ego.stack  # the system under test the searches re-run
         write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
         write_text_atomic(run.out / "replay.json", json.dumps(result, indent=1))
         run.finish("replay", result, time.perf_counter() - t0, 1)

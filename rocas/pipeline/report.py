@@ -48,10 +48,12 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     from rocas.pipeline.cyber import cyber_space
 
     searched = cyber.get("parameters")
-    total = len(cyber_space(None, {}).variables)  # what --scope all searches
+    stack = done.get("replay", {}).get("stack", "ads")
+    total = len(cyber_space(None, {}, stack).variables)  # what --scope all searches
     default = AnalyzeConfig()
     report = {
         "verdict": verdict,
+        "stack": stack,
         "explanation": "",
         # what produced this report (a run directory from before a setting existed used its
         # default); not the executor or workers, which do not change it

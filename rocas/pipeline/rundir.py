@@ -70,11 +70,15 @@ class Run:
     def cyber_space(self, module: str | None) -> MutationSpace:
         """The parameters the cyber phase searches (the module's, or all with --scope all) at
         the values in force in the accident run."""
-        from rocas.ads.params import ParamSet
-
         assert self.scenario is not None
-        return cyber_space(module if self.cfg.scope == "module" else None,
-                           dict(ParamSet(self.scenario.ego.overrides)))
+        ego = self.scenario.ego
+        if ego.stack == "ads":
+            from rocas.ads.params import ParamSet
+
+            current = dict(ParamSet(ego.overrides))
+        else:  # cyber_space takes the defaults of what is not overridden
+            current = ego.overrides
+        return cyber_space(module if self.cfg.scope == "module" else None, current, ego.stack)
 
     def save(self) -> None:
         write_text_atomic(self.out / "state.json", json.dumps(self.state, indent=2, default=jsonable))

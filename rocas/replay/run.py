@@ -141,7 +141,7 @@ def replay(source: Reconstruction | str | os.PathLike[str],
     Raises:
         UsageError: ``output`` is the recording being replayed.
     """
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     if output is not None and not isinstance(source, Reconstruction):
         refuse_overwriting(source, output)

@@ -25,6 +25,7 @@ from rocas.errors import RecordingError
 from rocas.msgs import localization_pb2, perception_pb2
 from rocas.recording.reader import ChannelInfo, open_recording
 from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
+from rocas.stacks.base import STACK_METADATA
 
 _NS = 1e-9
 #: PerceptionObstacle.Type codes (perception.proto).
@@ -73,6 +74,7 @@ class RecordedRun:
         detections: the perception obstacles.
         perception_period_s: median time between perception frames [s].
         warnings: the reader's warnings (truncation, skipped damage, undecodable messages).
+        stack: the stack that made the recording (its ``rocas.stack`` record; "ads" without).
     """
 
     path: str
@@ -85,6 +87,7 @@ class RecordedRun:
     detections: Detections
     perception_period_s: float
     warnings: tuple[str, ...] = ()
+    stack: str = "ads"
 
 
 def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
@@ -118,10 +121,14 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
             if msg.HasField("ego_position"):
                 embedded = (msg.ego_position.x, msg.ego_position.y, msg.ego_heading)
             frames.append((t, list(msg.perception_obstacle), embedded))
+    stack = dict(rec.metadata).get(STACK_METADATA, {}).get("name", "ads")
+    foreign = stack != "ads" and not pose_rows  # another stack's own channels (rocas.stacks)
+    if foreign:
+        pose_rows, lanes, frames = _stack_motion(path, rec, stack)
     topics = rec.topics()
     damage = tuple(rec.report.warnings(path))
     missing = [t for t in (TOPIC_POSE, TOPIC_OBSTACLES) if t not in topics]
-    if missing:
+    if missing and not foreign:
         raise RecordingError(
             f"{path}: replay needs channel(s) {', '.join(missing)}, which the recording lacks"
             + (f"; {damage[0].removeprefix(path + ': ')}" if damage else ""),
@@ -155,13 +162,51 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
     order = np.argsort(pose[:, 0], kind="stable")
     pose, lanes = pose[order], [lanes[i] for i in order]
     ego_times = pose[:, 0]
-    detections = _detections(frames, ego_times, pose[:, 1:4])
-    ftimes = np.array([f[0] for f in frames])
+    detections = (_agent_detections(frames) if foreign
+                  else _detections(frames, ego_times, pose[:, 1:4]))
+    ftimes = np.unique([f[0] for f in frames]) if foreign else np.array([f[0] for f in frames])
     period = float(np.median(np.diff(ftimes))) if len(ftimes) > 1 else 0.1
     return RecordedRun(path=path, world=world, ego_meta=meta.get(EGO_METADATA),
                        run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
                        ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
-                       perception_period_s=period if period > 0 else 0.1, warnings=damage)
+                       perception_period_s=period if period > 0 else 0.1, warnings=damage,
+                       stack=stack)
+
+
+_KIND_TYPES = {"vehicle": TYPE_VEHICLE, "bicycle": TYPE_BICYCLE, "pedestrian": TYPE_PEDESTRIAN}
+
+
+def _stack_motion(path: str, rec: Any, name: str) -> tuple[list[tuple[float, ...]], list[str],
+                                                        list[Any]]:
+    """The ego's pose rows and the agents of a recording made by the registered stack
+    ``name``, read by the stack's own ``read_motion`` (:mod:`rocas.stacks.base`)."""
+    from rocas.errors import UsageError
+    from rocas.stacks.registry import get_stack
+
+    try:
+        stack = get_stack(name)
+    except UsageError as exc:
+        raise RecordingError(f"{path}: recorded by stack {name!r}, which is not registered here",
+                             exc.hint) from None
+    reader = getattr(stack, "read_motion", None)
+    if reader is None:
+        raise RecordingError(f"{path}: stack {name!r} does not say how to replay its recordings",
+                             "give the stack a read_motion(recording) method (docs/own-stack.md)")
+    poses, agents = reader(rec)
+    if not poses:
+        raise RecordingError(f"{path}: no ego pose on stack {name!r}'s channels",
+                             "replay rebuilds the ego from the stack's pose channel")
+    return [tuple(p) for p in poses], [""] * len(poses), list(agents)
+
+
+def _agent_detections(rows: list[Any]) -> Detections:
+    """Detections from a stack's agent rows (:data:`rocas.stacks.base.AgentRow`, world frame)."""
+    a = np.asarray([(*r[:10], _KIND_TYPES[r[10]], 0) for r in rows],
+                   dtype=np.float64).reshape(-1, 12)
+    return Detections(times=a[:, 0], track_id=a[:, 1].astype(np.int64), xy=a[:, 2:4],
+                      heading=a[:, 4], velocity=a[:, 5:7], size=a[:, 7:10],
+                      type=a[:, 10].astype(np.int64), sub_type=a[:, 11].astype(np.int64),
+                      color=tuple(r[11] for r in rows))
 
 
 _REPLAY_TYPES = {TOPIC_POSE: localization_pb2.LocalizationEstimate.DESCRIPTOR.full_name,

@@ -313,9 +313,17 @@ def _actor(ctx: _Ctx, d: Any, key: str, lanes: Mapping[str, Lane]) -> Actor:
     )
 
 
-def _params(ctx: _Ctx, d: Any, key: str) -> tuple[tuple[str, float], ...]:
-    from rocas.ads.params import PARAMETERS
+def _params(ctx: _Ctx, d: Any, key: str, stack: str = "ads") -> tuple[tuple[str, float], ...]:
+    if stack == "ads":
+        from rocas.ads.params import PARAMETERS
+    else:  # another registered stack's inventory (resolved lazily, like the ADS's)
+        from rocas.errors import UsageError
+        from rocas.stacks.registry import get_stack
 
+        try:
+            PARAMETERS = {p.full_name: p for p in get_stack(stack).parameters}  # noqa: N806
+        except UsageError as exc:
+            raise ctx.fail("ego.stack", f"{exc.message} ({exc.hint})") from None
     if not isinstance(d, Mapping):
         raise ctx.fail(key, "expected a table of module tables")
     flat: dict[str, float] = {}
@@ -325,7 +333,8 @@ def _params(ctx: _Ctx, d: Any, key: str) -> tuple[tuple[str, float], ...]:
         for name, value in table.items():
             full = f"{module}.{name}"
             if full not in PARAMETERS:
-                raise ctx.fail(f"{key}.{full}", "unknown ADS parameter (see 'rocas params')")
+                what = "ADS parameter" if stack == "ads" else f"parameter of stack {stack!r}"
+                raise ctx.fail(f"{key}.{full}", f"unknown {what} (see 'rocas params')")
             p = PARAMETERS[full]
             flat[full] = _num(ctx, value, f"{key}.{full}", p.low, p.high)
     return tuple(sorted(flat.items()))
@@ -333,12 +342,15 @@ def _params(ctx: _Ctx, d: Any, key: str) -> tuple[tuple[str, float], ...]:
 
 def _ego(ctx: _Ctx, d: Any, lanes: Mapping[str, Lane]) -> Ego:
     t = _table(ctx, d, "ego", {"route", "start_s_m", "start_lateral_m", "start_speed_mps",
-                               "destination_s_m", "params"}, {"route"})
+                               "destination_s_m", "params", "stack"}, {"route"})
     route = _route(ctx, t["route"], "ego.route", lanes)
     if not route:
         raise ctx.fail("ego.route", "route is empty")
     length = route_length(route, lanes)
     dest = t.get("destination_s_m")
+    stack = t.get("stack", "ads")
+    if not isinstance(stack, str) or not stack:
+        raise ctx.fail("ego.stack", "expected a stack name such as \"ads\" or \"lav\"")
     return Ego(
         route=route,
         start_s_m=_num(ctx, t.get("start_s_m", 0.0), "ego.start_s_m", 0.0, length),
@@ -346,7 +358,8 @@ def _ego(ctx: _Ctx, d: Any, lanes: Mapping[str, Lane]) -> Ego:
         start_speed_mps=_num(ctx, t.get("start_speed_mps", 0.0), "ego.start_speed_mps", 0, 40),
         destination_s_m=None if dest is None else _num(ctx, dest, "ego.destination_s_m", 0,
                                                        length),
-        params=_params(ctx, t.get("params", {}), "ego.params"),
+        params=_params(ctx, t.get("params", {}), "ego.params", stack),
+        stack=stack,
     )
 
 
@@ -476,6 +489,8 @@ def scenario_to_dict(s: Scenario) -> dict[str, Any]:
                            "start_speed_mps": s.ego.start_speed_mps, "params": params}
     if s.ego.destination_s_m is not None:
         ego["destination_s_m"] = s.ego.destination_s_m
+    if s.ego.stack != "ads":  # the built-in ADS's scenarios read (and hash) as before
+        ego["stack"] = s.ego.stack
     w = s.weather
     return {
         "format": FORMAT_VERSION,

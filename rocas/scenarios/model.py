@@ -197,7 +197,10 @@ class Ego:
         start_lateral_m: start offset from the route centre, positive left [m].
         start_speed_mps: initial speed [m/s].
         destination_s_m: mission end along the route [m]; None means the route's end.
-        params: ADS parameter overrides ``(("module.name", value), ...)`` sorted by name.
+        params: parameter overrides of the stack ``(("module.name", value), ...)`` sorted by
+            name.
+        stack: the registered stack that drives the ego (:mod:`rocas.stacks.registry`):
+            "ads" is the built-in ADS.
     """
 
     route: tuple[str, ...]
@@ -206,6 +209,7 @@ class Ego:
     start_speed_mps: float = 0.0
     destination_s_m: float | None = None
     params: tuple[tuple[str, float], ...] = ()
+    stack: str = "ads"
 
     @property
     def overrides(self) -> dict[str, float]:

@@ -1,0 +1,318 @@
+"""The loop that joins a world and a stack: batch mode (N variants, nothing recorded) and
+recording mode (one variant, every channel written to MCAP), one semantics.
+
+Per step: the stack observes and decides, the ego integrates the stack's actuation, the actors
+move, the oracles judge. The world (map, actors, dynamics, oracles) is :mod:`rocas.sim`'s; the
+stack is anything that satisfies :class:`rocas.stacks.base.Stack`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocas.errors import UsageError
+from rocas.scenarios.loader import scenario_to_dict, world_to_dict
+from rocas.scenarios.model import Scenario
+from rocas.sim.actors import initial_actors, step_actors
+from rocas.sim.dynamics import VehicleState, bicycle_step
+from rocas.sim.oracles import UNJUSTIFIED_STOP_REASONS, Oracles, Outcome
+from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_friction
+from rocas.stacks.base import (
+    EGO_METADATA,
+    RUN_METADATA,
+    STACK_METADATA,
+    WORLD_ATTACHMENT,
+    MessageSink,
+    Observation,
+    Stack,
+    StackParams,
+    batch_params,
+)
+
+_NS = 1_000_000_000
+#: planning-reason codes the oracles take for "no traffic reason to stand" / "a reason"
+_UNJUSTIFIED, _JUSTIFIED = UNJUSTIFIED_STOP_REASONS[0], -1
+
+
+@dataclass(frozen=True, eq=False)
+class Rollout:
+    """Results of N variants.
+
+    Attributes:
+        times: (T + 1,) [s].
+        ego: (N, T + 1, 5) x [m], y [m], yaw [rad], speed [m/s], acceleration [m/s^2].
+        actors: (N, T + 1, A, 4) x, y, yaw, speed.
+        min_gap: (N, T + 1) smallest ego-to-obstacle box gap [m].
+        outcomes: one :class:`Outcome` per variant.
+        digests: per module, (N,) output fingerprints summed over the run.
+        actor_ids: actor ids in array order.
+        recording: the MCAP written (recording mode), else None; messages: how many.
+    """
+
+    times: np.ndarray
+    ego: np.ndarray
+    actors: np.ndarray
+    min_gap: np.ndarray
+    outcomes: list[Outcome]
+    digests: dict[str, np.ndarray]
+    actor_ids: tuple[str, ...]
+    recording: str | None = None
+    messages: int = 0
+
+
+def resolve(stack: Stack, overrides: Mapping[str, float] | StackParams | None,
+            source: str = "overrides") -> StackParams:
+    """The stack's defaults with ``overrides`` on top, validated against its inventory."""
+    if isinstance(overrides, StackParams):
+        return overrides
+    return StackParams(stack.parameters, overrides, source=source)
+
+
+def _initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleState:
+    s = np.array([sc.ego.start_s_m for sc in scenarios])
+    x, y, h, _ = reference_at(world.road, s)
+    d = np.array([sc.ego.start_lateral_m for sc in scenarios])
+    return VehicleState(x - d * np.sin(h), y + d * np.cos(h), h, h.copy(),
+                        np.array([sc.ego.start_speed_mps for sc in scenarios], dtype=float))
+
+
+def _loop(stack: Stack, world: BatchWorld, scenarios: Sequence[Scenario],
+          sets: Sequence[StackParams], sink: MessageSink | None) -> Rollout:
+    n = world.batch_size
+    run = stack.build(world, batch_params(sets))
+    ego = _initial_ego(world, scenarios)
+    actors = initial_actors(world)
+    friction = road_friction(world.weather[:, 1])
+    oracles = Oracles(world, np.full(n, scenarios[0].ego.start_s_m))
+    steps, na = world.num_ticks, len(world.actor_ids)
+    ego_tr = np.zeros((n, steps + 1, 5))
+    act_tr = np.zeros((n, steps + 1, na, 4))
+    gap_tr = np.zeros((n, steps + 1))
+    accel = np.zeros(n)
+    digests: dict[str, np.ndarray] = {}
+    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.full(n, _JUSTIFIED))
+
+    def record(i: int) -> None:
+        for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
+            ego_tr[:, i, j] = a
+        b = actors.body
+        for j, a in enumerate((b.x, b.y, b.yaw, b.speed)):
+            act_tr[:, i, :, j] = a
+        gap_tr[:, i] = oracles.last_gap
+
+    record(0)
+    dt_ns = round(world.dt_s * _NS)
+    for tick in range(steps):
+        t = tick * world.dt_s
+        b = actors.body
+        obs = Observation(tick, t, ego.x, ego.y, ego.yaw, ego.speed, accel, b.x, b.y, b.yaw,
+                          b.speed, {"ego": ego, "actors": b, "actor_state": actors})
+        act = run.step(obs)
+        if sink is not None:
+            run.publish(sink, tick, tick * dt_ns)
+        for name, value in run.digest().items():
+            digests[name] = digests.get(name, np.zeros(n)) + value
+        prev = ego
+        ego, accel = bicycle_step(ego, act.accel_mps2, act.curvature_1pm, friction, np.ones(n),
+                                  world.dt_s)
+        actors = step_actors(world, actors, t, prev, friction)
+        reason = np.where(act.stop_justified, _JUSTIFIED, _UNJUSTIFIED)
+        oracles.update(tick + 1, ego, accel, actors.body, act.estop, reason)
+        record(tick + 1)
+    oracles.finish_route(ego_tr[..., :2])
+    return Rollout(times=np.arange(steps + 1) * world.dt_s, ego=ego_tr, actors=act_tr,
+                   min_gap=gap_tr, outcomes=oracles.outcomes(), digests=digests,
+                   actor_ids=world.actor_ids)
+
+
+def rollout_batch(stack: Stack, scenarios: Scenario | Sequence[Scenario],
+                  params: Sequence[Mapping[str, float] | StackParams | None] | None = None,
+                  seeds: Sequence[int] | None = None) -> Rollout:
+    """Simulate N variants of one scenario structure with ``stack`` (nothing recorded).
+
+    Variant i is bit-identical to ``rollout(stack, scenarios[i], params[i], seeds[i])``
+    whatever N is (every stack computes per row; no computation mixes variants).
+    """
+    if isinstance(scenarios, Scenario):
+        count = len(params) if params is not None else len(seeds) if seeds is not None else 1
+        scenarios = [scenarios] * count
+    scenarios = list(scenarios)
+    params = list(params) if params is not None else [None] * len(scenarios)
+    if len(params) != len(scenarios):
+        raise UsageError(f"got {len(scenarios)} scenarios but {len(params)} parameter sets")
+    seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
+    world = compile_batch(scenarios, seeds)
+    sets = [resolve(stack, p, f"scenario {s.name}") for s, p in zip(scenarios, params,
+                                                                   strict=True)]
+    return _loop(stack, world, scenarios, sets, None)
+
+
+def rollout(stack: Stack, scenario: Scenario,
+            params: Mapping[str, float] | StackParams | None = None, seed: int | None = None,
+            *, output: str | os.PathLike[str] | None = None) -> Rollout:
+    """Simulate one run; with ``output``, write every channel of ``stack`` to an MCAP file
+    with the topology, the static world attachment, the stack's name and the outcome."""
+    from rocas.recording.writer import RecordingWriter
+
+    seed = scenario.seed if seed is None else seed
+    world = compile_batch([scenario], [seed])
+    pset = resolve(stack, params, f"scenario {scenario.name}")
+    if output is None:
+        return _loop(stack, world, [scenario], [pset], None)
+    count = 0
+    with RecordingWriter(output) as writer:
+        for ch in stack.channels:
+            writer.add_channel(ch.topic, ch.message_type, writers=[ch.writer],
+                               readers=list(ch.readers), role=ch.role,
+                               metadata={"rocas.period_s": f"{ch.period_s:g}"})
+        writer.add_attachment(WORLD_ATTACHMENT,
+                              json.dumps(world_to_dict(scenario), indent=1).encode(),
+                              media_type="application/json")
+        writer.add_metadata(STACK_METADATA, {"name": stack.name})
+        writer.add_metadata(EGO_METADATA, ego_metadata(scenario, pset, seed))
+
+        def sink(topic: str, msg: object, t_ns: int) -> None:
+            nonlocal count
+            writer.write(topic, msg, log_time_ns=t_ns)
+            count += 1
+
+        res = _loop(stack, world, [scenario], [pset], sink)
+        writer.add_metadata(RUN_METADATA, outcome_metadata(res.outcomes[0]))
+    return Rollout(times=res.times, ego=res.ego, actors=res.actors, min_gap=res.min_gap,
+                   outcomes=res.outcomes, digests=res.digests, actor_ids=res.actor_ids,
+                   recording=str(output), messages=count)
+
+
+def ego_metadata(scenario: Scenario, params: StackParams, seed: int) -> dict[str, str]:
+    """The ``rocas.ego`` record: the mission, the parameter overrides, seed and timing."""
+    d = scenario_to_dict(scenario)
+    return {
+        "scenario": scenario.name,
+        "route": ",".join(scenario.ego.route),
+        "start_s_m": repr(scenario.ego.start_s_m),
+        "start_lateral_m": repr(scenario.ego.start_lateral_m),
+        "start_speed_mps": repr(scenario.ego.start_speed_mps),
+        "destination_s_m": "" if scenario.ego.destination_s_m is None
+        else repr(scenario.ego.destination_s_m),
+        "params": json.dumps(params.overrides(), sort_keys=True),
+        "seed": str(seed),
+        "dt_s": repr(scenario.dt_s),
+        "duration_s": repr(scenario.duration_s),
+        "ego": json.dumps(d["ego"], sort_keys=True),
+        "actors": json.dumps(d["actors"]),
+    }
+
+
+def _opt(v: float | None) -> str:
+    return "" if v is None else repr(v)
+
+
+def outcome_metadata(o: Outcome) -> dict[str, str]:
+    """The ``rocas.run`` record: what happened, as strings."""
+    return {
+        "outcome": o.summary(),
+        "collided": str(o.collided).lower(),
+        "collision_with": o.collision_with or "",
+        "collision_time_s": _opt(o.collision_time_s),
+        "collision_kind": o.collision_kind or "",
+        "collision_position": "" if o.collision_position is None
+        else json.dumps([float(v) for v in o.collision_position]),
+        "emergency": str(o.emergency).lower(),
+        "hard_brake_time_s": _opt(o.hard_brake_time_s),
+        "estop_time_s": _opt(o.estop_time_s),
+        "unexpected_stop": str(o.unexpected_stop).lower(),
+        "max_decel_mps2": repr(o.max_decel_mps2),
+        "min_separation_m": repr(o.min_separation_m),
+        "route_completion": repr(o.route_completion),
+    }
+
+
+# -- by the scenario's stack: what the pipeline calls ------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SingleRun:
+    """One run of :func:`simulate`: the outcome, (T + 1,) times [s], (T + 1, 5) ego, (T + 1, A,
+    4) actors, (T + 1,) min_gap [m], the recording written (or None) and its message count."""
+
+    outcome: Outcome
+    times: np.ndarray
+    ego: np.ndarray
+    actors: np.ndarray
+    min_gap: np.ndarray
+    recording: str | None
+    messages: int
+
+
+def _merged(scenario: Scenario, params: Mapping[str, float] | None) -> dict[str, float]:
+    """The scenario's own overrides with ``params`` on top (as the engine merges them)."""
+    return {**scenario.ego.overrides, **dict(params or {})}
+
+
+def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
+             seed: int | None = None, *, output: str | os.PathLike[str] | None = None
+             ) -> SingleRun:
+    """One run with the stack the scenario names (``scenario.ego.stack``): the built-in ADS
+    through :func:`rocas.sim.engine.simulate`, any other registered stack through
+    :func:`rollout`; ``params`` go on top of the scenario's own overrides."""
+    if scenario.ego.stack == "ads":
+        from rocas.sim.engine import simulate as simulate_ads
+
+        r = simulate_ads(scenario, params or None, seed, output=output)
+        return SingleRun(r.outcome, r.times, r.ego, r.actors, r.min_gap, r.recording,
+                         r.messages)
+    from rocas.stacks.registry import get_stack
+
+    r = rollout(get_stack(scenario.ego.stack), scenario, _merged(scenario, params), seed,
+                output=output)  # the recording writer writes atomically
+    return SingleRun(r.outcomes[0], r.times, r.ego[0], r.actors[0], r.min_gap[0],
+                     r.recording, r.messages)
+
+
+def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float]],
+                   seeds: Sequence[int]) -> Rollout:
+    """N variants of one scenario structure with the stack they name (all the same); the
+    built-in ADS through :func:`rocas.sim.engine.simulate_batch`. Returns the fields the
+    searches read (times, ego, actors, min_gap, outcomes)."""
+    stacks = {s.ego.stack for s in scenarios}
+    if len(stacks) != 1:
+        raise UsageError(f"one batch mixes stacks {sorted(stacks)}",
+                         "batch variants of one scenario only")
+    (name,) = stacks
+    if name == "ads":
+        from rocas.sim.engine import simulate_batch as simulate_batch_ads
+
+        r = simulate_batch_ads(list(scenarios), params=[dict(p) for p in params],
+                               seeds=list(seeds))
+        return Rollout(times=r.times, ego=r.ego, actors=r.actors, min_gap=r.min_gap,
+                       outcomes=r.outcomes, digests={}, actor_ids=r.actor_ids)
+    from rocas.stacks.registry import get_stack
+
+    return rollout_batch(get_stack(name), list(scenarios),
+                         [_merged(s, p) for s, p in zip(scenarios, params, strict=True)],
+                         list(seeds))
+
+
+def with_stack(scenario: Scenario, name: str) -> Scenario:
+    """``scenario`` driven by the registered stack ``name`` (``--stack NAME``).
+
+    Raises:
+        UsageError: no such stack, or the scenario overrides parameters of another stack.
+    """
+    import dataclasses
+
+    from rocas.stacks.registry import get_stack
+
+    if name == scenario.ego.stack:
+        return scenario
+    get_stack(name)  # refuses an unknown name
+    if scenario.ego.params:
+        raise UsageError(f"scenario {scenario.name} sets parameters of stack "
+                         f"{scenario.ego.stack!r}, which stack {name!r} does not have",
+                         "remove its [ego.params] or give --stack its own scenario")
+    return dataclasses.replace(scenario, ego=dataclasses.replace(scenario.ego, stack=name))
