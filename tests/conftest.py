@@ -61,3 +61,19 @@ def ros2_pair(tmp_path_factory):
     cmg = out / "cmg.json"
     cmg.write_text(json.dumps(ROS2_CMG))
     return acc, ref, cmg
+
+
+@pytest.fixture(scope="session")
+def ray_cluster():
+    """One local Ray (two CPUs) for the whole test run: starting one takes seconds. Skipped
+    where Ray, an optional extra (``rocas[ray]``, part of the dev extras), is missing."""
+    ray = pytest.importorskip("ray")
+    from rocas.search.ray_executor import LOCAL_OBJECT_STORE_BYTES
+
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False,
+                 object_store_memory=LOCAL_OBJECT_STORE_BYTES)
+    yield ray
+    if started:
+        ray.shutdown()
