@@ -61,3 +61,39 @@ def ros2_pair(tmp_path_factory):
     cmg = out / "cmg.json"
     cmg.write_text(json.dumps(ROS2_CMG))
     return acc, ref, cmg
+
+
+@pytest.fixture(scope="session")
+def ray_cluster():
+    """One local Ray (two CPUs) for the whole test run: starting one takes seconds. Skipped
+    where Ray, an optional extra (``rocas[ray]``, part of the dev extras), is missing."""
+    ray = pytest.importorskip("ray")
+    from rocas.search.ray_executor import LOCAL_OBJECT_STORE_BYTES
+
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False,
+                 object_store_memory=LOCAL_OBJECT_STORE_BYTES)
+    yield ray
+    if started:
+        ray.shutdown()
+
+
+@pytest.fixture(scope="session")
+def small_campaign(tmp_path_factory):
+    """A triaged campaign of two accidents (small budgets, in this process): the red-truck
+    example as a scenario file, and a file that is not a scenario (listed as failed)."""
+    from rocas.campaign import collect_inputs, triage
+    from rocas.pipeline import AnalyzeConfig
+    from rocas.scenarios import load_example
+    from rocas.scenarios.catalog import scenario_toml
+    from rocas.search import SerialExecutor
+
+    src = tmp_path_factory.mktemp("campaign_inputs")
+    scenario = dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0)
+    (src / "red_truck.toml").write_text(scenario_toml(scenario))
+    (src / "broken.toml").write_text("this is = not [a scenario\n")
+    out = tmp_path_factory.mktemp("campaign") / "c"
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=0)
+    campaign = triage(collect_inputs([str(src)]), out, cfg, executor=SerialExecutor())
+    return out, campaign

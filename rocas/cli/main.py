@@ -40,6 +40,7 @@ COMMANDS: dict[str, str] = {
     "view": "view",
     "catalog": "catalog",
     "bench": "bench",
+    "triage": "triage",
 }
 
 

@@ -34,6 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-viewer", action="store_true", help="only write --rrd; open no viewer")
     p.add_argument("--web-port", type=int, default=9090, help="web viewer port (default 9090)")
     p.add_argument("--grpc-port", type=int, default=9876, help="gRPC data port (default 9876)")
+    p.add_argument("--page-port", type=int, default=8080,
+                   help="with a campaign directory: the campaign page's port (default 8080)")
 
 
 def has_display(environ: dict[str, str] | None = None) -> bool:
@@ -73,6 +75,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
         raise InputError(f"{source}: no such file or directory")
     if args.no_viewer and not args.rrd:
         raise UsageError("--no-viewer needs --rrd OUT.rrd")
+    if source.is_dir() and (source / "campaign.json").exists():
+        return _serve_campaign(source, args, env)
     keep = Path(args.rrd) if args.rrd else None
     if keep is not None:
         check_writable(keep)
@@ -168,4 +172,24 @@ def _serve_web(out: Path, args: argparse.Namespace, env: Env) -> int:
             time.sleep(1.0)
     except KeyboardInterrupt:
         rec.disconnect()
+        return 0
+
+
+def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> int:
+    """A ``rocas triage`` directory: its browser view (viewer/), served until Ctrl-C."""
+    from rocas.viz.campaign_web import CampaignServer
+
+    if not args.web:
+        raise UsageError(f"{campaign_dir} is a campaign: it is shown in the browser",
+                         f"rocas view --web {campaign_dir}")
+    server = CampaignServer(campaign_dir, port=args.page_port, web_viewer_port=args.web_port)
+    server.start()
+    env.out().print(f"Campaign view: {server.url}")
+    env.out().print("Serving until Ctrl-C.")
+    env.stdout.flush()
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        server.stop()
         return 0

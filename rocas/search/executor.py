@@ -203,5 +203,14 @@ def executor_names() -> list[str]:
     return sorted(_REGISTRY)
 
 
+def _ray_executor(workers: int | None) -> Executor:
+    """The Ray executor (:mod:`rocas.search.ray_executor`), imported only when asked for: Ray
+    is an optional dependency. It joins the cluster named by ``RAY_ADDRESS``, if set."""
+    from rocas.search.ray_executor import RayExecutor
+
+    return RayExecutor(workers)
+
+
 register_executor("serial", SerialExecutor)
 register_executor("local", LocalExecutor)
+register_executor("ray", _ray_executor)

@@ -1,0 +1,53 @@
+"""Accidents analysed per hour by ``rocas triage`` with the local executor and with Ray, on one
+small campaign, and whether both give the same campaign.json groups.
+
+    nice python tests/benchmarks/bench_triage.py CAMPAIGN_INPUTS... [--workers 2] [--budget 240]
+
+e.g. on the accidents ``rocas catalog generate --family mixed --instances 2 -o DIR`` writes.
+Each executor analyses the campaign from scratch in its own temporary directory (``--repeat``
+times; min and median printed); the figures of a shared machine move with its load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from rocas.campaign import collect_inputs, groups_signature, triage
+from rocas.pipeline import AnalyzeConfig
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("inputs", nargs="+")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--budget", type=int, default=240)
+    ap.add_argument("--validation", type=int, default=0)
+    ap.add_argument("--repeat", type=int, default=1)
+    args = ap.parse_args()
+    inputs = collect_inputs(args.inputs)
+    rates: dict[str, list[float]] = {}
+    groups = {}
+    for name in ("local", "ray"):
+        cfg = AnalyzeConfig(budget=args.budget, workers=args.workers, executor=name,
+                            validation_variants=args.validation)
+        for _ in range(args.repeat):
+            with tempfile.TemporaryDirectory(prefix=f"bench-triage-{name}-") as d:
+                start = time.perf_counter()
+                campaign = triage(inputs, Path(d) / "c", cfg)
+                hours = (time.perf_counter() - start) / 3600
+            rates.setdefault(name, []).append(len(inputs) / hours)
+            groups[name] = groups_signature(campaign)
+        r = rates[name]
+        print(f"{name:>5}: {len(inputs)} accidents, min {min(r):.0f} / median "
+              f"{statistics.median(r):.0f} accidents per hour ({args.workers} workers)", flush=True)
+    ratio = statistics.median(rates["ray"]) / statistics.median(rates["local"])
+    print(f"ray / local: {ratio:.2f}")
+    print(f"identical campaign.json groups: {groups['local'] == groups['ray']}")
+
+
+if __name__ == "__main__":
+    main()

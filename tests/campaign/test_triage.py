@@ -1,0 +1,43 @@
+"""rocas triage end to end on a small campaign (the session's ``small_campaign``)."""
+
+import json
+
+from rocas.campaign import collect_inputs
+
+
+def test_campaign_lists_groups_and_failures_and_writes_its_files(small_campaign):
+    out, c = small_campaign
+    assert c["accidents_total"] == 2 and c["analysed"] == 1 and not c["complete"]
+    [failed] = c["failed"]
+    assert failed["name"] == "broken" and "not valid TOML" in failed["reason"]
+    assert "\n" not in failed["reason"]
+    [g] = c["groups"]
+    [a] = c["accidents"]
+    assert g["accidents"] == ["red_truck"] and a["group"] == g["id"]
+    assert g["root_cause"] == a["root_causes"][0]
+    assert a["confidence"]["level"] in ("stable", "contested", "unstable")
+    assert json.loads((out / "campaign.json").read_text()) == c
+    assert "broken" in (out / "campaign.md").read_text()
+    assert (out / "runs" / "red_truck" / "report.json").exists()
+
+
+def test_resume_reads_finished_accidents_back_and_refuses_without_it(small_campaign, rocas, tmp_path):
+    out, c = small_campaign
+    src = [str(p) for p in collect_inputs([c["accidents"][0]["source"]])[0].path.parent.glob("*.toml")]
+    args = ["triage", *src, "--out", out, "--seed", 1, "--budget", 16, "--population", 8,
+            "--workers", 1, "--executor", "serial"]
+    refused = rocas(*args)
+    assert refused.code == 2 and "--resume" in refused.stderr
+    again = rocas(*args, "--resume", "--json")
+    assert again.code == 0, again.stderr
+    got = json.loads(again.stdout)
+    assert got["groups"] == c["groups"] and got["failed"] == c["failed"]
+
+
+def test_a_recording_beside_its_ground_truth_is_one_accident(tmp_path):
+    (tmp_path / "x.mcap").write_bytes(b"")
+    (tmp_path / "x.toml").write_text('[ground_truth]\nid = "A3"\ntitle = "t"\n')
+    (tmp_path / "y.toml").write_text("")
+    items = collect_inputs([str(tmp_path)])
+    assert [(i.name, i.kind, i.truth_type) for i in items] == [("x", "recording", "A3"),
+                                                                 ("y", "scenario", None)]
