@@ -31,11 +31,17 @@ D_IGNORE, D_FOLLOW, D_YIELD, D_OVERTAKE, D_STOP, D_NUDGE = range(6)
 M_CRUISE, M_STOP, M_ESTOP = range(3)
 # ADCTrajectory.EStopReason
 E_NONE, E_COLLISION, E_PERCEPTION_BRAKE, E_NO_PATH = range(4)
-#: Stop/slow-down reasons (main_decision.reason); the oracles read them.
+#: Stop/slow-down reasons (main_decision.reason).
 REASONS = ("cruise", "destination", "traffic_light", "follow", "yield", "blocked_by_static",
            "vulnerable_road_user", "perception_brake", "collision_imminent", "collision_fallback")
 R_CRUISE, R_DEST, R_LIGHT, R_FOLLOW, R_YIELD, R_BLOCKED, R_VRU, R_PBRAKE, R_COLL, R_FALLBACK = (
     range(10))
+#: Reasons under which standing still is not justified by traffic (the oracles' unexpected
+#: stop: cruising, a static blockage, a brake-classifier brake, a collision reflex).
+UNJUSTIFIED_STOP_REASONS = (R_CRUISE, R_BLOCKED, R_PBRAKE, R_COLL, R_FALLBACK)
+#: (len(REASONS),) bool: per reason code, whether it justifies a stop (``np.isin`` costs
+#: ~150 us a call, a lookup nothing)
+STOP_JUSTIFIED = ~np.isin(np.arange(len(REASONS)), UNJUSTIFIED_STOP_REASONS)
 ACCEL_DECAY_S = 1.0  # [s] planned accelerations fade with this time constant
 HOLD_TAU_S = 0.5  # [s] a hold behind a vehicle beside the path closes its speed error this fast
 HOLD_RECOVER_S = 2.0  # [s] ... and drops back to its hold gap over this time when too close
@@ -449,4 +455,5 @@ def _row_gradient(a: np.ndarray) -> np.ndarray:
     return out
 
 
-__all__ = ["MAX_POINTS", "REASONS", "Planning", "PlanningOutput", "REF_SPACING_M"]
+__all__ = ["MAX_POINTS", "REASONS", "STOP_JUSTIFIED", "UNJUSTIFIED_STOP_REASONS", "Planning",
+           "PlanningOutput", "REF_SPACING_M"]

@@ -14,6 +14,11 @@ from rocas.msgs import (
     prediction_pb2,
 )
 
+# the recording keys of rocas's own recordings, importable from here too
+from rocas.recording.topology import EGO_METADATA as EGO_METADATA
+from rocas.recording.topology import RUN_METADATA as RUN_METADATA
+from rocas.recording.topology import WORLD_ATTACHMENT as WORLD_ATTACHMENT
+
 LOCALIZATION = "localization"
 CANBUS = "canbus"
 PERCEPTION = "perception"
@@ -29,10 +34,6 @@ TOPIC_BRAKE_SIGNAL = "/perception/brake_signal"
 TOPIC_PREDICTION = "/prediction"
 TOPIC_PLANNING = "/planning"
 TOPIC_CONTROL = "/control"
-
-WORLD_ATTACHMENT = "rocas/world.json"
-EGO_METADATA = "rocas.ego"
-RUN_METADATA = "rocas.run"
 
 
 @dataclass(frozen=True)

@@ -99,8 +99,8 @@ def _list(args: argparse.Namespace, env: Env) -> int:
 
 
 def _record(args: argparse.Namespace, env: Env) -> int:
+    from rocas.ads.run import simulate
     from rocas.scenarios.catalog import accident_matches
-    from rocas.sim.engine import simulate
 
     out_dir = Path(args.directory)
     check_parent_exists(out_dir)
@@ -202,8 +202,8 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
 
 def _record_variant(v, out_dir: Path) -> None:  # noqa: ANN001
     """The variant's accident recording, as ``rocas catalog record`` writes an entry's."""
+    from rocas.ads.run import simulate
     from rocas.scenarios.catalog import accident_matches
-    from rocas.sim.engine import simulate
 
     res = simulate(v.scenario, output=out_dir / f"{v.name}.mcap")
     if not accident_matches(v.entry.truth, res.outcome):  # the check simulated the same run

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from rocas.ads.oracle import SUBSTITUTABLE
+from rocas.ads.run import ParamsLike, simulate_batch
 from rocas.scenarios.model import Scenario
-from rocas.sim.engine import ParamsLike, simulate_batch
 from rocas.sim.oracles import Outcome
 
 Stance = Literal["agrees", "consistent", "disagrees", "undetermined"]

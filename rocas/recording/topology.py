@@ -7,6 +7,10 @@ Channel metadata keys (all optional, values are strings):
 - ``rocas.role``: ``control`` marks the channel Algorithm 1 starts from.
 - ``callerid``: the ROS 1 profile's publishing node; counts as the writer when
   ``rocas.writers`` is absent.
+
+rocas's own recordings also carry the static world as the ``rocas/world.json`` attachment, the
+ego's mission and parameter overrides as the ``rocas.ego`` metadata record and the run's outcome
+as ``rocas.run``.
 """
 
 from __future__ import annotations
@@ -18,6 +22,9 @@ READERS_KEY = "rocas.readers"
 ROLE_KEY = "rocas.role"
 ROS1_CALLERID_KEY = "callerid"
 CONTROL_ROLE = "control"
+WORLD_ATTACHMENT = "rocas/world.json"
+EGO_METADATA = "rocas.ego"
+RUN_METADATA = "rocas.run"
 
 
 def split_modules(value: str | None) -> tuple[str, ...]:

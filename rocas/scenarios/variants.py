@@ -263,7 +263,7 @@ def _batch_key(s: Scenario) -> tuple[object, ...]:
 def _simulate_groups(runs: Sequence[tuple[Scenario, Mapping[str, float] | None]]) -> list[Any]:
     """Simulate (scenario, params) runs, batching those of one structure; returns per run
     (outcome, ego trace (T + 1, 5), times (T + 1,))."""
-    from rocas.sim.engine import simulate_batch
+    from rocas.ads.run import simulate_batch
 
     groups: dict[tuple[object, ...], list[int]] = {}
     for i, (s, _) in enumerate(runs):

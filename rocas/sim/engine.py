@@ -1,33 +1,33 @@
-"""The simulation loop, in its two modes with one semantics.
+"""The simulation loop that joins a world and a stack, in two modes with one semantics.
 
 - :func:`simulate_batch` steps N variants of one scenario together (arrays of shape (N, ...)),
   records nothing and returns trajectories and oracle outcomes.
 - :func:`simulate` runs one variant through the very same loop and, when given an output path,
-  publishes every module's messages to an MCAP recording.
+  lets the stack publish its messages to an MCAP recording.
 
-Both are pure functions of picklable inputs: (scenario, parameter overrides, seed) -> result.
+The stack is the caller's: a :data:`rocas.sim.protocol.StackFactory` that builds a
+:class:`rocas.sim.protocol.StackRun` for the compiled world. Per step the stack observes and
+decides, the ego integrates its actuation, the actors move, the oracles judge. Both functions
+are pure functions of their inputs: (scenario, stack, seed) -> result. The built-in ADS is wired
+in by :mod:`rocas.ads.run`, whose ``simulate``/``simulate_batch`` take parameter overrides.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence, Set
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from rocas.ads.params import ParamSet, stack_params
-from rocas.ads.stack import AdsStack, TickOutputs, output_digest
 from rocas.scenarios.model import Scenario
 from rocas.sim.actors import initial_actors, step_actors
 from rocas.sim.dynamics import VehicleState, bicycle_step
 from rocas.sim.oracles import Oracles, Outcome
+from rocas.sim.protocol import Channel, MessageSink, Observation, StackFactory, StackRun
 from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_friction
 
-MODULE_ORDER = ("localization", "canbus", "perception", "prediction", "planning", "control")
-ParamsLike = Mapping[str, float] | ParamSet | None
-#: modules publishing ground truth: one set of names for every variant, or one set per variant
-OracleModules = Set[str] | Sequence[Set[str]]
+_NS = 1_000_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,7 +40,8 @@ class BatchResult:
         actors: (N, T + 1, A, 4) x, y, yaw, speed.
         min_gap: (N, T + 1) smallest ego-to-obstacle box gap at each step [m].
         outcomes: one :class:`Outcome` per variant.
-        digests: (N, 6) per-module output fingerprints (MODULE_ORDER), or None.
+        digests: (N, M) per-module output fingerprints summed over the run, in the order of
+            the ``digest_modules`` asked for, or None.
         actor_ids: actor ids in array order.
     """
 
@@ -66,19 +67,6 @@ class RunResult:
     messages: int
 
 
-Publisher = Callable[[int, float, TickOutputs], None]
-
-
-def resolve_params(scenario: Scenario, params: ParamsLike) -> ParamSet:
-    """Scenario overrides, then the caller's overrides on top."""
-    merged = dict(scenario.ego.params)
-    if isinstance(params, ParamSet):
-        merged.update(params.overrides())
-    elif params:
-        merged.update(params)
-    return ParamSet(merged, source=f"scenario {scenario.name}")
-
-
 def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleState:
     """The ego's start state per variant (start lateral offset and speed may differ)."""
     s = np.array([sc.ego.start_s_m for sc in scenarios])
@@ -88,13 +76,22 @@ def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleStat
                         np.array([sc.ego.start_speed_mps for sc in scenarios], dtype=float))
 
 
-def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[ParamSet], *,
-         publish: Publisher | None = None, track_outputs: bool = False,
-         on_tick: Callable[[int], None] | None = None,
-         oracle_modules: OracleModules = frozenset()) -> BatchResult:
+def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
+            sink: MessageSink | None = None, digest_modules: Sequence[str] | None = None,
+            on_tick: Callable[[int], None] | None = None) -> BatchResult:
+    """Step the compiled ``world`` (N variants of ``scenarios``) with the stack ``run``.
+
+    Args:
+        world: the compiled batch (:func:`rocas.sim.world.compile_batch`).
+        scenarios: the N scenarios it was compiled from (start states).
+        run: the stack, built for ``world``.
+        sink: recording mode: the stack publishes variant 0's messages here each step.
+        digest_modules: sum the stack's per-module output digests over the run, one column per
+            named module (:attr:`BatchResult.digests`); None: skip them.
+        on_tick: called with the step index after each step.
+    """
     n = world.batch_size
     scenario = scenarios[0]  # the structure (route, start arc length) all variants share
-    stack = AdsStack(world, stack_params(param_sets), oracle_modules)
     ego = initial_ego(world, scenarios)
     actors = initial_actors(world)
     friction = road_friction(world.weather[:, 1])
@@ -105,9 +102,9 @@ def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[
     act_tr = np.zeros((n, steps + 1, na, 4))
     gap_tr = np.zeros((n, steps + 1))
     accel = np.zeros(n)
-    digests = np.zeros((n, len(MODULE_ORDER))) if track_outputs else None
-    reason = np.zeros(n, dtype=np.int64)
-    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), reason)
+    columns = {m: i for i, m in enumerate(digest_modules)} if digest_modules is not None else None
+    digests = np.zeros((n, len(columns))) if columns is not None else None
+    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
 
     def record(i: int) -> None:
         for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
@@ -118,23 +115,23 @@ def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[
         gap_tr[:, i] = oracles.last_gap
 
     record(0)
+    dt_ns = round(world.dt_s * _NS)
     for tick in range(steps):
         t = tick * world.dt_s
-        out = stack.step(tick, ego, accel, actors.body, actors)
-        if publish is not None:
-            publish(tick, t, out)
-        if digests is not None:
-            for name, value in output_digest(out).items():
-                digests[:, MODULE_ORDER.index(name)] += value
-        a_dem, curvature = stack.actuate(out.control)
-        if out.planning is not None:
-            reason = out.planning.reason
+        b = actors.body
+        act = run.step(Observation(tick, t, ego.x, ego.y, ego.yaw, ego.speed, accel, b.x, b.y,
+                                   b.yaw, b.speed, {"ego": ego, "actors": b,
+                                                    "actor_state": actors}))
+        if sink is not None:
+            run.publish(sink, tick, tick * dt_ns)
+        if digests is not None and columns is not None:
+            for name, value in run.digest().items():
+                digests[:, columns[name]] += value
         prev = ego
-        ego, accel = bicycle_step(ego, a_dem, curvature, friction, np.ones(n), world.dt_s)
-        stack.canbus.advance_odometer(np.hypot(ego.x - prev.x, ego.y - prev.y))
+        ego, accel = bicycle_step(ego, act.accel_mps2, act.curvature_1pm, friction, np.ones(n),
+                                  world.dt_s)
         actors = step_actors(world, actors, t, prev, friction)
-        oracles.update(tick + 1, ego, accel, actors.body,
-                       out.control.estop | stack.plan.estop, reason)
+        oracles.update(tick + 1, ego, accel, actors.body, act.estop, act.stop_justified)
         record(tick + 1)
         if on_tick is not None:
             on_tick(tick)
@@ -145,68 +142,50 @@ def _run(world: BatchWorld, scenarios: Sequence[Scenario], param_sets: Sequence[
     )
 
 
-def simulate_batch(
-    scenarios: Scenario | Sequence[Scenario],
-    params: Sequence[ParamsLike] | None = None,
-    seeds: Sequence[int] | None = None,
-    *,
-    track_outputs: bool = False,
-    oracle_modules: OracleModules = frozenset(),
-) -> BatchResult:
-    """Simulate N variants together (batch mode; records nothing).
+def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
+                   seeds: Sequence[int] | None = None, *,
+                   digest_modules: Sequence[str] | None = None) -> BatchResult:
+    """Simulate N variants of one structure together (batch mode; records nothing).
 
     Args:
-        scenarios: one scenario (repeated to match ``params``/``seeds``) or N variants of one
-            structure (same map, ego route and entity ids; properties may differ).
-        params: N parameter override mappings (or ParamSets), applied on top of each
-            scenario's own ``ego.params``; None means none.
+        scenarios: N variants of one structure (same map, ego route and entity ids;
+            properties may differ).
+        stack: builds the system under test for the compiled world (its parameters per
+            variant are the factory's business).
         seeds: N seeds; None means each scenario's seed.
-        track_outputs: also return per-module output fingerprints (``digests``).
-        oracle_modules: modules whose output is replaced by ground truth (module
-            substitution, :mod:`rocas.ads.oracle`): one set of names for every variant, or N
-            sets; empty (the default) runs the ADS as it is.
+        digest_modules: also return per-module output fingerprints, one column per name.
 
     Returns:
-        :class:`BatchResult`; variant i is identical to ``simulate(scenarios[i], params[i],
-        seeds[i])`` whatever N is.
+        :class:`BatchResult`; variant i is identical to a run of ``scenarios[i]`` alone
+        whatever N is (as long as the stack computes per row).
     """
-    if isinstance(scenarios, Scenario):
-        count = len(params) if params is not None else len(seeds) if seeds is not None else 1
-        scenarios = [scenarios] * count
     scenarios = list(scenarios)
-    n = len(scenarios)
-    params = list(params) if params is not None else [None] * n
-    if len(params) != n:
-        from rocas.errors import UsageError
-        raise UsageError(f"got {n} scenarios but {len(params)} parameter sets")
     seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
     world = compile_batch(scenarios, seeds)
-    sets = [resolve_params(s, p) for s, p in zip(scenarios, params, strict=True)]
-    return _run(world, scenarios, sets, track_outputs=track_outputs,
-                oracle_modules=oracle_modules)
+    return rollout(world, scenarios, stack(world), digest_modules=digest_modules)
 
 
-def simulate(
-    scenario: Scenario,
-    params: ParamsLike = None,
-    seed: int | None = None,
-    *,
-    output: str | os.PathLike[str] | None = None,
-    on_tick: Callable[[int], None] | None = None,
-) -> RunResult:
-    """Simulate one run (recording mode): with ``output``, write an MCAP recording with every
-    module's messages, the topology metadata and the static world attachment."""
+def simulate(scenario: Scenario, stack: StackFactory, seed: int | None = None, *,
+             output: str | os.PathLike[str] | None = None, channels: Sequence[Channel] = (),
+             param_overrides: Mapping[str, float] | None = None,
+             on_tick: Callable[[int], None] | None = None) -> RunResult:
+    """Simulate one run (recording mode).
+
+    With ``output``, write an MCAP recording: the stack's ``channels`` with their topology,
+    every message the stack publishes, the static world attachment, the mission with
+    ``param_overrides`` (the stack's parameters that differ from its defaults) and the
+    outcome (:class:`rocas.sim.recorder.RunRecorder`).
+    """
     seed = scenario.seed if seed is None else seed
     world = compile_batch([scenario], [seed])
-    pset = resolve_params(scenario, params)
     if output is None:
-        res = _run(world, [scenario], [pset], on_tick=on_tick)
+        res = rollout(world, [scenario], stack(world), on_tick=on_tick)
         path, count = None, 0
     else:
-        from rocas.sim.recorder import ScenarioRecorder
+        from rocas.sim.recorder import RunRecorder
 
-        with ScenarioRecorder(output, scenario, pset, seed) as rec:
-            res = _run(world, [scenario], [pset], publish=rec.publish, on_tick=on_tick)
+        with RunRecorder(output, scenario, channels, param_overrides or {}, seed) as rec:
+            res = rollout(world, [scenario], stack(world), sink=rec.write, on_tick=on_tick)
             rec.finish(res.outcomes[0])
         path, count = str(output), rec.count
     return RunResult(outcome=res.outcomes[0], times=res.times, ego=res.ego[0],

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rocas.ads.planning import R_BLOCKED, R_COLL, R_CRUISE, R_FALLBACK, R_PBRAKE, REASONS
 from rocas.sim.dynamics import VehicleState
 from rocas.sim.geometry import box_corners, box_gap, clip, points_in_polygons
 from rocas.sim.world import LIGHT_CODES, BatchWorld, light_state, project_on_reference
@@ -22,10 +21,6 @@ MOVED_MPS = 1.0                # [m/s] the ego must have moved before a stop is 
 #: [m] standing this close before the stop line of a red or yellow light on the ego's route is
 #: waiting at that light (in a queue, behind cars that wait too), whatever the planner's reason
 QUEUE_AT_LIGHT_M = 50.0
-#: Planning reasons under which standing still is not justified by traffic.
-UNJUSTIFIED_STOP_REASONS = (R_CRUISE, R_BLOCKED, R_PBRAKE, R_COLL, R_FALLBACK)
-#: (len(REASONS),) bool: a lookup per reason code (``np.isin`` costs ~150 us a call)
-_UNJUSTIFIED = np.isin(np.arange(len(REASONS)), UNJUSTIFIED_STOP_REASONS)
 COLLIDER_ACTOR, COLLIDER_OBJECT, COLLIDER_AREA = 0, 1, 2
 
 
@@ -39,7 +34,8 @@ class Outcome:
         collision_position: first collision (None when none).
         hard_brake: deceleration beyond 4 m/s^2 before any collision; hard_brake_time_s.
         estop: an estop was raised without a collision having happened; estop_time_s.
-        unexpected_stop: the ego stood still >= 2 s after moving, for no traffic reason.
+        unexpected_stop: the ego stood still >= 2 s after moving, for no traffic reason (the
+            stack named none, and it was not queueing at a red or yellow light).
         emergency: hard_brake or estop or unexpected_stop.
         max_decel_mps2: hardest realised deceleration [m/s^2].
         min_separation_m: smallest box-to-box gap to any actor or object over the run [m]
@@ -108,7 +104,10 @@ class Oracles:
         self.half_width = np.concatenate([world.actor_dims[..., 1], world.object_dims[..., 1]], 1) / 2
 
     def update(self, tick: int, ego: VehicleState, accel: np.ndarray, actors: VehicleState,
-               estop: np.ndarray, reason: np.ndarray) -> None:
+               estop: np.ndarray, stop_justified: np.ndarray) -> None:
+        """Judge step ``tick``: ego and actors after it, the ego's (N,) acceleration
+        [m/s^2], and what the stack said: (N,) estop raised, and (N,) ``stop_justified``, its
+        plan names a traffic reason to stand still (:class:`rocas.sim.protocol.Actuation`)."""
         w = self.world
         hl, hw = w.ego_dims[0] / 2, w.ego_dims[1] / 2
         ex, ey, eyaw = ego.x[:, None], ego.y[:, None], ego.yaw[:, None]
@@ -152,8 +151,7 @@ class Oracles:
         est = clean & estop & (self.estop_tick < 0)
         self.estop_tick = np.where(est, tick, self.estop_tick)
         self.moved |= ego.speed > MOVED_MPS
-        unjust = _UNJUSTIFIED[reason]
-        standing = (ego.speed < STANDSTILL_MPS) & self.moved & unjust
+        standing = (ego.speed < STANDSTILL_MPS) & self.moved & ~stop_justified
         if standing.any() and w.light_ids:
             standing &= ~self._waiting_at_light(tick, ego)
         self.stand_time = np.where(standing, self.stand_time + w.dt_s, 0.0)

@@ -1,70 +1,45 @@
-"""Recording mode: publish every module's messages of variant 0 to an MCAP file.
+"""Recording mode: one run of any stack to an MCAP file.
 
-The file carries the topology (``rocas.writers``, ``rocas.readers``, ``rocas.role``), the static
-world as the ``rocas/world.json`` attachment, the ego mission and parameters as the ``rocas.ego``
-metadata record and the run's outcome as ``rocas.run``: one file is enough to replay.
+The file carries the stack's channels with their topology (``rocas.writers``, ``rocas.readers``,
+``rocas.role``), the static world as the ``rocas/world.json`` attachment, the ego mission and
+the stack's parameter overrides as the ``rocas.ego`` metadata record and the run's outcome as
+``rocas.run``: one file is enough to replay. The messages are the stack's: it builds them and
+hands them to :meth:`RunRecorder.write` (the engine's message sink).
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
+from collections.abc import Mapping, Sequence
 from types import TracebackType
 
-import numpy as np
-
-from rocas.ads.params import ParamSet
-from rocas.ads.planning import REASONS
-from rocas.ads.stack import TickOutputs
-from rocas.ads.topics import (
-    CANBUS,
-    CHANNELS,
-    CONTROL,
-    EGO_METADATA,
-    LOCALIZATION,
-    PERCEPTION,
-    PLANNING,
-    PREDICTION,
-    RUN_METADATA,
-    TOPIC_BRAKE_SIGNAL,
-    TOPIC_CHASSIS,
-    TOPIC_CONTROL,
-    TOPIC_OBSTACLES,
-    TOPIC_PLANNING,
-    TOPIC_POSE,
-    TOPIC_PREDICTION,
-    TOPIC_TRAFFIC_LIGHT,
-    WORLD_ATTACHMENT,
-)
-from rocas.msgs import (
-    chassis_pb2,
-    control_pb2,
-    localization_pb2,
-    perception_pb2,
-    planning_pb2,
-    prediction_pb2,
-)
+from rocas.recording.topology import EGO_METADATA, RUN_METADATA, WORLD_ATTACHMENT
 from rocas.recording.writer import RecordingWriter
 from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
 from rocas.sim.oracles import Outcome
-from rocas.sim.world import COLOR_NAMES
-
-_NS = 1_000_000_000
+from rocas.sim.protocol import Channel
 
 
-class ScenarioRecorder:
-    """Context manager that writes one run's messages; use :meth:`publish` as the engine's
-    publisher and :meth:`finish` with the outcome before closing."""
+class RunRecorder:
+    """Context manager that writes one run; use :meth:`write` as the engine's message sink and
+    :meth:`finish` with the outcome before closing.
 
-    def __init__(self, path: str | os.PathLike[str], scenario: Scenario, params: ParamSet,
+    Args:
+        path: the MCAP file to write (atomically).
+        scenario: the scenario simulated.
+        channels: the stack's channels, registered in this order.
+        param_overrides: the stack's parameters that differ from its defaults.
+        seed: the run's seed.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], scenario: Scenario,
+                 channels: Sequence[Channel], param_overrides: Mapping[str, float],
                  seed: int) -> None:
-        self.scenario = scenario
         self.writer = RecordingWriter(path)
         self.count = 0
-        self._seq: dict[str, int] = {}
-        for ch in CHANNELS:
+        for ch in channels:
             self.writer.add_channel(ch.topic, ch.message_type, writers=[ch.writer],
                                     readers=list(ch.readers), role=ch.role,
                                     metadata={"rocas.period_s": f"{ch.period_s:g}"})
@@ -80,26 +55,26 @@ class ScenarioRecorder:
             "start_speed_mps": repr(scenario.ego.start_speed_mps),
             "destination_s_m": "" if scenario.ego.destination_s_m is None
             else repr(scenario.ego.destination_s_m),
-            "params": json.dumps(params.overrides(), sort_keys=True),
+            "params": json.dumps(dict(param_overrides), sort_keys=True),
             "seed": str(seed),
             "dt_s": repr(scenario.dt_s),
             "duration_s": repr(scenario.duration_s),
             "ego": json.dumps(ego, sort_keys=True),
             "actors": json.dumps(scenario_to_dict(scenario)["actors"]),
         })
-        self._lanes = scenario.lane_by_id
-        self._lane_ids = tuple(ln.id for ln in scenario.lanes)
-        self._actor_ids = tuple(a.id for a in scenario.actors)
-        self._object_ids = tuple(o.id for o in scenario.objects)
-        self._light_ids = tuple(t.id for t in scenario.traffic_lights)
 
     # -- context manager ------------------------------------------------------------------
-    def __enter__(self) -> ScenarioRecorder:
+    def __enter__(self) -> RunRecorder:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.writer.__exit__(exc_type, exc, tb)
+
+    def write(self, topic: str, msg: object, t_ns: int) -> None:
+        """Write one message at log time ``t_ns`` [ns] (a :data:`MessageSink`)."""
+        self.writer.write(topic, msg, log_time_ns=t_ns)
+        self.count += 1
 
     def finish(self, outcome: Outcome) -> None:
         self.writer.add_metadata(RUN_METADATA, {
@@ -119,206 +94,7 @@ class ScenarioRecorder:
             "route_completion": repr(outcome.route_completion),
         })
 
-    # -- publishing -----------------------------------------------------------------------
-    def _header(self, msg: object, module: str, topic: str, t: float, frame: int) -> None:
-        seq = self._seq.get(topic, 0)
-        self._seq[topic] = seq + 1
-        h = msg.header  # type: ignore[attr-defined]
-        h.timestamp_sec = t
-        h.module_name = module
-        h.sequence_num = seq
-        h.frame_id = frame
-
-    def _write(self, topic: str, msg: object, t_ns: int) -> None:
-        self.writer.write(topic, msg, log_time_ns=t_ns)
-        self.count += 1
-
-    def publish(self, tick: int, t: float, out: TickOutputs) -> None:
-        t_ns = tick * round(self.scenario.dt_s * _NS)
-        t = t_ns / _NS
-        loc = out.localization
-        m = localization_pb2.LocalizationEstimate()
-        self._header(m, LOCALIZATION, TOPIC_POSE, t, tick)
-        pose = m.pose
-        pose.position.x, pose.position.y = float(loc.x[0]), float(loc.y[0])
-        pose.heading = float(loc.heading[0])
-        pose.linear_velocity.x, pose.linear_velocity.y = float(loc.vx[0]), float(loc.vy[0])
-        pose.linear_acceleration.x = float(loc.ax[0])
-        pose.linear_acceleration.y = float(loc.ay[0])
-        pose.angular_velocity = float(loc.yaw_rate[0])
-        lane = int(loc.lane[0])
-        m.lane_id = self._lane_ids[lane] if lane >= 0 else ""
-        m.lane_s = float(loc.lane_s[0])
-        self._write(TOPIC_POSE, m, t_ns)
-
-        ch = out.chassis
-        c = chassis_pb2.Chassis()
-        self._header(c, CANBUS, TOPIC_CHASSIS, t, tick)
-        c.engine_started = True
-        c.speed_mps = float(ch.speed[0])
-        c.odometer_m = float(ch.odometer[0])
-        c.throttle_percentage = float(ch.throttle[0])
-        c.brake_percentage = float(ch.brake[0])
-        c.steering_percentage = float(ch.steering[0])
-        c.gear_location = chassis_pb2.Chassis.GEAR_DRIVE
-        c.driving_mode = (chassis_pb2.Chassis.EMERGENCY_MODE if bool(ch.emergency[0])
-                          else chassis_pb2.Chassis.COMPLETE_AUTO_DRIVE)
-        self._write(TOPIC_CHASSIS, c, t_ns)
-
-        if out.perception is not None:
-            obstacles = self._perception(tick, t, t_ns, out)
-            self._prediction(tick, t, t_ns, out, obstacles)
-            self._planning(tick, t, t_ns, out)
-
-        ctl = out.control
-        cc = control_pb2.ControlCommand()
-        self._header(cc, CONTROL, TOPIC_CONTROL, t, tick)
-        cc.throttle = float(ctl.throttle[0])
-        cc.brake = float(ctl.brake[0])
-        cc.steering_target = float(ctl.steering_target[0])
-        cc.steering_rate = float(ctl.steering_rate[0])
-        cc.acceleration = float(ctl.acceleration[0])
-        cc.estop = bool(ctl.estop[0])
-        cc.lateral_error = float(ctl.lateral_error[0])
-        cc.heading_error = float(ctl.heading_error[0])
-        cc.station_error = float(ctl.station_error[0])
-        cc.speed_error = float(ctl.speed_error[0])
-        self._write(TOPIC_CONTROL, cc, t_ns)
-
-    def _perception(self, tick: int, t: float, t_ns: int, out: TickOutputs
-                    ) -> dict[int, perception_pb2.PerceptionObstacle]:
-        per = out.perception
-        assert per is not None
-        msg = perception_pb2.PerceptionObstacles()
-        self._header(msg, PERCEPTION, TOPIC_OBSTACLES, t, tick)
-        msg.ego_position.x = float(per.ego_x[0])
-        msg.ego_position.y = float(per.ego_y[0])
-        msg.ego_heading = float(per.ego_heading[0])
-        slots = np.flatnonzero(per.published[0])
-        built: dict[int, perception_pb2.PerceptionObstacle] = {}
-        if len(slots):
-            cols = {f: getattr(per, f)[0, slots].tolist() for f in (
-                "track_id", "type", "sub_type", "color", "x", "y", "theta", "vx", "vy", "ax", "ay",
-                "length", "width", "height", "confidence", "tracking_time")}
-            for k, slot in enumerate(slots.tolist()):
-                o = msg.perception_obstacle.add()
-                o.id = int(cols["track_id"][k])
-                o.type = int(cols["type"][k])
-                o.sub_type = int(cols["sub_type"][k])
-                color = int(cols["color"][k])
-                o.color = COLOR_NAMES[color] if color >= 0 else "unknown"
-                x, y, th = cols["x"][k], cols["y"][k], cols["theta"][k]
-                o.position.x, o.position.y = x, y
-                o.theta = th
-                o.velocity.x, o.velocity.y = cols["vx"][k], cols["vy"][k]
-                o.acceleration.x, o.acceleration.y = cols["ax"][k], cols["ay"][k]
-                ln, wd = cols["length"][k], cols["width"][k]
-                o.length, o.width, o.height = ln, wd, cols["height"][k]
-                cth, sth = math.cos(th), math.sin(th)
-                for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1)):
-                    px, py = sx * ln / 2, sy * wd / 2
-                    pt = o.polygon_point.add()
-                    pt.x, pt.y = x + px * cth - py * sth, y + px * sth + py * cth
-                o.confidence = cols["confidence"][k]
-                o.tracking_time = cols["tracking_time"][k]
-                built[slot] = o
-        self._write(TOPIC_OBSTACLES, msg, t_ns)
-
-        tl = perception_pb2.TrafficLightDetection()
-        self._header(tl, PERCEPTION, TOPIC_TRAFFIC_LIGHT, t, tick)
-        det = per.tl_detected[0]
-        for i in np.flatnonzero(det).tolist():
-            light = tl.traffic_light.add()
-            light.id = self._light_ids[i]
-            light.color = int(per.tl_color[0, i])
-            light.confidence = float(per.tl_confidence[0, i])
-            light.distance_m = float(per.tl_distance[0, i])
-        sel = int(per.tl_selected[0])
-        tl.selected_light_id = self._light_ids[sel] if sel >= 0 else ""
-        tl.contain_lights = bool(det.any())
-        self._write(TOPIC_TRAFFIC_LIGHT, tl, t_ns)
-
-        b = perception_pb2.BrakeSignal()
-        self._header(b, PERCEPTION, TOPIC_BRAKE_SIGNAL, t, tick)
-        b.brake_probability = float(per.brake_probability[0])
-        b.brake_threshold = float(per.brake_threshold[0])
-        b.brake = bool(per.brake[0])
-        self._write(TOPIC_BRAKE_SIGNAL, b, t_ns)
-        return built
-
-    def _prediction(self, tick: int, t: float, t_ns: int, out: TickOutputs,
-                    obstacles: dict[int, perception_pb2.PerceptionObstacle]) -> None:
-        pred = out.prediction
-        assert pred is not None
-        msg = prediction_pb2.PredictionObstacles()
-        self._header(msg, PREDICTION, TOPIC_PREDICTION, t, tick)
-        horizon = float(pred.horizon[0])
-        msg.start_timestamp = t
-        msg.end_timestamp = t + horizon
-        valid = pred.traj_valid[0]
-        times = pred.traj_t[0, valid].tolist()
-        prob = float(pred.probability[0])
-        for slot, obstacle in obstacles.items():
-            po = msg.prediction_obstacle.add()
-            po.perception_obstacle.CopyFrom(obstacle)
-            po.timestamp = t
-            po.predicted_period = horizon
-            static = bool(pred.is_static[0, slot])
-            po.is_static = static
-            po.intent = int(pred.intent[0, slot])
-            if static:
-                continue
-            tr = po.trajectory.add()
-            tr.probability = prob
-            xs = pred.traj_x[0, slot, valid].tolist()
-            ys = pred.traj_y[0, slot, valid].tolist()
-            hs = pred.traj_heading[0, slot, valid].tolist()
-            vs = pred.traj_v[0, slot, valid].tolist()
-            for x, y, h, v, tt in zip(xs, ys, hs, vs, times, strict=True):
-                pt = tr.trajectory_point.add()
-                pt.position.x, pt.position.y = x, y
-                pt.theta, pt.v, pt.relative_time = h, v, tt
-        self._write(TOPIC_PREDICTION, msg, t_ns)
-
-    def _planning(self, tick: int, t: float, t_ns: int, out: TickOutputs) -> None:
-        plan = out.planning
-        per = out.perception
-        assert plan is not None and per is not None
-        msg = planning_pb2.ADCTrajectory()
-        self._header(msg, PLANNING, TOPIC_PLANNING, t, tick)
-        valid = plan.valid[0]
-        cols = [getattr(plan, f)[0, valid].tolist() for f in ("x", "y", "theta", "kappa", "s",
-                                                                "v", "a", "t")]
-        s0 = cols[4][0]
-        for x, y, th, kp, s, v, a, tt in zip(*cols, strict=True):
-            pt = msg.trajectory_point.add()
-            pt.x, pt.y, pt.theta, pt.kappa = x, y, th, kp
-            pt.s, pt.v, pt.a, pt.relative_time = s - s0, v, a, tt
-        msg.total_path_length = cols[4][-1] - s0
-        msg.total_path_time = cols[7][-1]
-        md = msg.main_decision
-        md.type = int(plan.main[0])
-        md.stop_distance = float(plan.stop_distance[0])
-        md.reason = REASONS[int(plan.reason[0])]
-        tracks = per.track_id[0]
-        for slot in np.flatnonzero(plan.decision[0]).tolist():
-            d = msg.object_decision.add()
-            d.id = str(int(tracks[slot]))
-            d.type = int(plan.decision[0, slot])
-            d.distance_s = float(plan.decision_s[0, slot])
-            if d.type == planning_pb2.ObjectDecision.NUDGE:
-                d.lateral_offset = float(plan.nudge_offset[0])
-        msg.estop = bool(plan.estop[0])
-        msg.estop_reason = int(plan.estop_reason[0])
-        lane = int(plan.lane[0])
-        msg.lane_id = self._lane_ids[lane] if lane >= 0 else ""
-        msg.cruise_speed = float(plan.cruise_speed[0])
-        self._write(TOPIC_PLANNING, msg, t_ns)
-
 
 def _opt(v: float | None) -> str:
     """A metadata value for an optional time: "" when absent."""
     return "" if v is None else repr(float(v))
-
-
-__all__ = ["ScenarioRecorder", "CANBUS", "CONTROL"]

@@ -59,7 +59,7 @@ class AdsRun:
     def publish(self, sink: MessageSink, tick: int, t_ns: int) -> None:
         from rocas.errors import UsageError
 
-        raise UsageError("the built-in ADS records through rocas.sim.engine.simulate",
+        raise UsageError("the built-in ADS records through rocas.ads.run.simulate",
                          "use 'rocas simulate' for ADS recordings")
 
     def digest(self) -> dict[str, np.ndarray]:

@@ -20,7 +20,7 @@ from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
 from rocas.sim.actors import initial_actors, step_actors
 from rocas.sim.dynamics import VehicleState, bicycle_step
-from rocas.sim.oracles import UNJUSTIFIED_STOP_REASONS, Oracles, Outcome
+from rocas.sim.oracles import Oracles, Outcome
 from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_friction
 from rocas.stacks.base import (
     EGO_METADATA,
@@ -35,8 +35,6 @@ from rocas.stacks.base import (
 )
 
 _NS = 1_000_000_000
-#: planning-reason codes the oracles take for "no traffic reason to stand" / "a reason"
-_UNJUSTIFIED, _JUSTIFIED = UNJUSTIFIED_STOP_REASONS[0], -1
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,7 +93,7 @@ def _loop(stack: Stack, world: BatchWorld, scenarios: Sequence[Scenario],
     gap_tr = np.zeros((n, steps + 1))
     accel = np.zeros(n)
     digests: dict[str, np.ndarray] = {}
-    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.full(n, _JUSTIFIED))
+    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
 
     def record(i: int) -> None:
         for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
@@ -121,8 +119,7 @@ def _loop(stack: Stack, world: BatchWorld, scenarios: Sequence[Scenario],
         ego, accel = bicycle_step(ego, act.accel_mps2, act.curvature_1pm, friction, np.ones(n),
                                   world.dt_s)
         actors = step_actors(world, actors, t, prev, friction)
-        reason = np.where(act.stop_justified, _JUSTIFIED, _UNJUSTIFIED)
-        oracles.update(tick + 1, ego, accel, actors.body, act.estop, reason)
+        oracles.update(tick + 1, ego, accel, actors.body, act.estop, act.stop_justified)
         record(tick + 1)
     oracles.finish_route(ego_tr[..., :2])
     return Rollout(times=np.arange(steps + 1) * world.dt_s, ego=ego_tr, actors=act_tr,
@@ -258,10 +255,10 @@ def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
              seed: int | None = None, *, output: str | os.PathLike[str] | None = None
              ) -> SingleRun:
     """One run with the stack the scenario names (``scenario.ego.stack``): the built-in ADS
-    through :func:`rocas.sim.engine.simulate`, any other registered stack through
+    through :func:`rocas.ads.run.simulate`, any other registered stack through
     :func:`rollout`; ``params`` go on top of the scenario's own overrides."""
     if scenario.ego.stack == "ads":
-        from rocas.sim.engine import simulate as simulate_ads
+        from rocas.ads.run import simulate as simulate_ads
 
         r = simulate_ads(scenario, params or None, seed, output=output)
         return SingleRun(r.outcome, r.times, r.ego, r.actors, r.min_gap, r.recording,
@@ -277,7 +274,7 @@ def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
 def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float]],
                    seeds: Sequence[int]) -> Rollout:
     """N variants of one scenario structure with the stack they name (all the same); the
-    built-in ADS through :func:`rocas.sim.engine.simulate_batch`. Returns the fields the
+    built-in ADS through :func:`rocas.ads.run.simulate_batch`. Returns the fields the
     searches read (times, ego, actors, min_gap, outcomes)."""
     stacks = {s.ego.stack for s in scenarios}
     if len(stacks) != 1:
@@ -285,7 +282,7 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
                          "batch variants of one scenario only")
     (name,) = stacks
     if name == "ads":
-        from rocas.sim.engine import simulate_batch as simulate_batch_ads
+        from rocas.ads.run import simulate_batch as simulate_batch_ads
 
         r = simulate_batch_ads(list(scenarios), params=[dict(p) for p in params],
                                seeds=list(seeds))

@@ -7,24 +7,25 @@ from rocas.ads import classifier
 from rocas.ads.oracle import SUBSTITUTABLE
 from rocas.ads.perception import sim_light_to_tl
 from rocas.ads.prediction import perceived_world_state
+from rocas.ads.run import AdsRun, resolve_params, simulate_batch
 from rocas.ads.stack import oracle_masks
 from rocas.errors import UsageError
 from rocas.scenarios.catalog import entry
-from rocas.sim.engine import _run, resolve_params, simulate_batch
+from rocas.sim.engine import rollout
 from rocas.sim.world import compile_batch, light_state
 
 
 def _outputs(scenario, oracle_modules):
     """One run with its stack outputs at every perception step: {tick: TickOutputs}."""
     world = compile_batch([scenario], [scenario.seed])
+    run = AdsRun(world, [resolve_params(scenario, None)], oracle_modules)
     seen = {}
 
-    def keep(tick, t, out):
-        if out.perception is not None:
-            seen[tick] = out
+    def keep(tick):
+        if run.out.perception is not None:
+            seen[tick] = run.out
 
-    res = _run(world, [scenario], [resolve_params(scenario, None)], publish=keep,
-               oracle_modules=oracle_modules)
+    res = rollout(world, [scenario], run, on_tick=keep)
     return world, res, seen
 
 

@@ -8,8 +8,8 @@ changes the fingerprint of some module's published output over the run.
 import numpy as np
 
 from rocas.ads.params import PARAMETERS
+from rocas.ads.run import MODULE_ORDER, simulate_batch
 from rocas.scenarios import load_example
-from rocas.sim.engine import MODULE_ORDER, simulate_batch
 
 CASES = (
     ("junction_straight", {}),

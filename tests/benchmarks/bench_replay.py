@@ -14,9 +14,9 @@ import argparse
 import tempfile
 from pathlib import Path
 
+from rocas.ads.run import simulate
 from rocas.replay import replay
 from rocas.scenarios import load_example
-from rocas.sim.engine import simulate
 
 EXAMPLES = ("left_turn_oncoming", "foggy_crossing", "junction_straight", "roundabout_red_truck",
             "wet_truck_turn")

@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[2]
 _CHILD = """
 import json, sys, time
 from rocas.scenarios import load_example
-from rocas.sim.engine import simulate_batch
+from rocas.ads.run import simulate_batch
 name, n, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 scenario = load_example(name)
 simulate_batch(scenario, seeds=[0])  # warm caches (map compilation, weights)
@@ -72,8 +72,8 @@ def extract(ref: str, into: Path) -> str:
 
 def recording_mode(scenario_name: str, repeat: int) -> None:
     sys.path.insert(0, str(ROOT))  # this checkout's rocas, as the children import it
+    from rocas.ads.run import simulate
     from rocas.scenarios import load_example
-    from rocas.sim.engine import simulate
 
     scenario = load_example(scenario_name)
     with tempfile.TemporaryDirectory() as tmp:

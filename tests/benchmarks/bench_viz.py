@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rocas.ads.run import simulate
 from rocas.analysis.diff import diff
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
-from rocas.sim.engine import simulate
 from rocas.viz.analysis import write_analysis_rrd
 from rocas.viz.scene import load_execution, log_scene
 from rocas.viz.signals import log_signals

@@ -2,9 +2,9 @@
 
 import pytest
 
+from rocas.ads.run import simulate
 from rocas.analysis import diff
 from rocas.scenarios import load_example
-from rocas.sim.engine import simulate
 
 
 @pytest.fixture(scope="module")

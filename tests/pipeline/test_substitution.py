@@ -3,9 +3,9 @@
 import pytest
 
 from rocas.ads.oracle import SUBSTITUTABLE
+from rocas.ads.run import simulate_batch
 from rocas.pipeline.substitution import second_opinion
 from rocas.scenarios.catalog import accident_matches, entries, entry
-from rocas.sim.engine import simulate_batch
 
 
 @pytest.fixture(scope="module")

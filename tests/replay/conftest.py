@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from rocas.ads.run import RunResult, simulate
 from rocas.scenarios import load_example
-from rocas.sim.engine import RunResult, simulate
 
 #: example -> simulated seconds (enough to include its accident)
 DURATIONS = {"left_turn_oncoming": 18.5, "roundabout_red_truck": 9.0, "foggy_crossing": 7.0}

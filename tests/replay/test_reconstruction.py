@@ -57,7 +57,7 @@ def test_world_ego_and_actor_identity(recorded):
 
 def test_actor_trajectories_match_the_ground_truth(recorded):
     """Perception (ego frame) -> world: replayed actors drive where the originals drove."""
-    from rocas.sim.engine import simulate
+    from rocas.ads.run import simulate
 
     rec = recorded("roundabout_red_truck")
     r = reconstruct(rec.path)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from rocas.ads.params import PARAMETERS
+from rocas.ads.run import simulate_batch
 from rocas.recording.reader import open_recording
 from rocas.scenarios.catalog import (
     PRE_ACCIDENT_MARGIN_S,
@@ -26,7 +27,6 @@ from rocas.scenarios.catalog import (
     trajectory_rmse,
 )
 from rocas.scenarios.loader import scenario_from_dict
-from rocas.sim.engine import simulate_batch
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 ENTRIES = entries()

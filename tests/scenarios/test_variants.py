@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rocas.ads.run import simulate_batch
 from rocas.errors import UsageError
 from rocas.scenarios.catalog import accident_matches, entry, fix_holds
 from rocas.scenarios.loader import scenario_to_dict
@@ -18,7 +19,6 @@ from rocas.scenarios.variants import (
     source_entry,
     variant_toml,
 )
-from rocas.sim.engine import simulate_batch
 
 
 def _draw(type_id: str, family: str, k: int = 0):  # noqa: ANN202

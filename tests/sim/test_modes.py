@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
+from rocas.ads.run import simulate, simulate_batch
 from rocas.ads.topics import CHANNELS, EGO_METADATA, WORLD_ATTACHMENT
 from rocas.recording.reader import open_recording
 from rocas.scenarios import load_example, scenario_from_dict
-from rocas.sim.engine import simulate, simulate_batch
 
 
 @pytest.fixture(scope="module")

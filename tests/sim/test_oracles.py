@@ -1,7 +1,7 @@
 import dataclasses
 
+from rocas.ads.run import simulate, simulate_batch
 from rocas.scenarios import load_example, scenario_from_dict
-from rocas.sim.engine import simulate, simulate_batch
 
 ROAD = {
     "scenario": {"name": "oracle", "duration_s": 12.0},

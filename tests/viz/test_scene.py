@@ -7,10 +7,10 @@ import pytest
 from foreign_stack import make_pair
 from rrd import read_rrd
 
+from rocas.ads.run import simulate
 from rocas.recording.reader import open_recording
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
-from rocas.sim.engine import simulate
 from rocas.viz.scene import actor_names, light_color_at, load_execution, log_scene
 from rocas.viz.search import generations_from_json, log_search
 from rocas.viz.signals import log_signals

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from foreign_stack import make_pair
 
+from rocas.ads.run import simulate
 from rocas.analysis import diff
 from rocas.scenarios.loader import load_example
-from rocas.sim.engine import simulate
 from rocas.viz.analysis import write_analysis_rrd
 from rocas.viz.diff import ORANGE, RED, write_diff_rrd
 from rocas.viz.scene import BACKGROUND_RGB

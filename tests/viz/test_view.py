@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from rrd import read_rrd
 
+from rocas.ads.run import simulate
 from rocas.analysis.diff import diff
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
-from rocas.sim.engine import simulate
 from rocas.viz.analysis import log_run_dir, write_analysis_rrd, write_run_dir_rrd
 from rocas.viz.stream import rrd_recording
 

@@ -346,7 +346,7 @@ def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
     kept when it passes. Stops at ``count`` kept or ``max_tries`` (default ``8 * count``)
     tried.
     """
-    from rocas.sim.engine import simulate_batch
+    from rocas.ads.run import simulate_batch
 
     if count < 1:
         raise UsageError("the number of instances must be >= 1")

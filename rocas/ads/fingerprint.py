@@ -1,4 +1,4 @@
-"""A run's fingerprint: one sha256 over everything a simulation produces.
+"""A run's fingerprint: one sha256 over everything a simulation with the built-in ADS produces.
 
 Used to prove that the simulator's output is bit-identical across machines, BLAS kernels and
 SIMD paths (tests/sim/test_fingerprints.py stores the catalog's fingerprints).
@@ -20,7 +20,7 @@ def run_fingerprint(scenario: Scenario, *, with_messages: bool = True) -> str:
     ``with_messages``, the payload of every message the run publishes, in log order."""
     from mcap.reader import make_reader
 
-    from rocas.sim.engine import simulate, simulate_batch
+    from rocas.ads.run import simulate, simulate_batch
 
     h = hashlib.sha256()
     res = simulate_batch(scenario, track_outputs=True)
