@@ -228,11 +228,11 @@ def phase_physical(run: Run) -> dict[str, Any]:
         evaluations += scores.simulated
         result["shrink_evaluations"] = scores.simulated
         result["search_chosen"] = cand_json(chosen)
-        # the shrink must not change what the diff says: a reference shrunk to the edge of
-        # avoiding the accident can avoid it another way (A1: the creeping car lifted just
-        # below prediction's still-obstacle speed is still forecast as static, and the ego
-        # gets past because the car is farther on); the most shrunk step whose diff names the
-        # unshrunk reference's module is kept
+        # the shrink must not change how the reference avoids the accident: shrunk to the
+        # edge of avoiding it, it can avoid it another way (A1: the creeping car lifted just
+        # below prediction's still-obstacle speed is forecast as static again, prediction no
+        # longer departs, and the ego waits for the car as for a parked one); the most shrunk
+        # step in whose diff the same modules depart as in the unshrunk one's is kept
         small, checked, recorded = _settle(run, list(dict.fromkeys(trail)))
         evaluations += len(checked)
         result["shrink_checked"] = checked
@@ -263,9 +263,12 @@ def phase_physical(run: Run) -> dict[str, Any]:
 def _settle(run: Run, trail: list[Mutation]
             ) -> tuple[Mutation, list[dict[str, Any]], Path | None]:
     """The most shrunk reference of ``trail`` (the chosen reference, then each accepted shrink
-    step) whose diff against the accident names the module the unshrunk reference's does.
-    Returns it, the steps diffed (``{"mutation", "module"}``, in the order tried) and its
-    recording (None when the trail has one step and nothing was recorded)."""
+    step) in whose diff against the accident the same modules depart (have a change point) as
+    in the unshrunk reference's: shrinking moves the reference closer to the accident, and may
+    move change points, but a step after which a module no longer departs at all (or another
+    one starts to) avoids the accident by another mechanism. Returns it, the steps diffed
+    (``{"mutation", "module", "departed"}``, in the order tried) and its recording (None when
+    the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
     from rocas.sim.engine import simulate
 
@@ -274,19 +277,19 @@ def _settle(run: Run, trail: list[Mutation]
     if len(trail) < 2:
         return trail[0], [], None
     checked: list[dict[str, Any]] = []
-    paths: list[Path] = []
 
-    def module_of(k: int) -> str | None:
+    def departed(k: int) -> list[str]:
         path = run.out / f"shrink_{k}.mcap"
         simulate(apply_physical(scn, trail[k]), output=path)
-        paths.append(path)
-        module = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s).deviating_module
-        checked.append({"mutation": dict(trail[k].values), "module": module})
-        return module
+        found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s).to_json()
+        modules = sorted(m["name"] for m in found["modules"] if m["change_point_s"] is not None)
+        checked.append({"mutation": dict(trail[k].values), "module": found["deviating_module"],
+                        "departed": modules})
+        return modules
 
-    want = module_of(0)
+    want = departed(0)
     for k in range(len(trail) - 1, 0, -1):
-        if module_of(k) == want:
+        if departed(k) == want:
             return trail[k], checked, run.out / f"shrink_{k}.mcap"
     return trail[0], checked, run.out / "shrink_0.mcap"
 
