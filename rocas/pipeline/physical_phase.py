@@ -270,7 +270,7 @@ def _settle(run: Run, trail: list[Mutation]
     (``{"mutation", "module", "departed"}``, in the order tried) and its recording (None when
     the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
-    from rocas.sim.engine import simulate
+    from rocas.stacks.rollout import simulate
 
     scn = run.scenario
     assert scn is not None
