@@ -146,8 +146,15 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
     ``tolerance`` of it keeps the ego farther from everything (``separation``: the run's
     smallest gap to any actor or object [m], 0.5 m more or better): such changes are
     equally small, and the one that adds margin is the repair, not the one that avoids the
-    accident narrowly (an overtake margin lowered until the ego races ahead of the truck)."""
-    order = sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names))
+    accident narrowly (an overtake margin lowered until the ego races ahead of the truck).
+    A fix that leaves the ego less than SCRAPE_M from anything ranks after every fix that
+    does not, whatever its h2: the collision became a scrape, nothing was repaired (an A11
+    variant: `idm_exponent` 4 -> 6.4, h2 1.34, passes the truck at 6 cm; the collision
+    check, h2 1.42, keeps 6.1 m)."""
+    def scrape(i: int) -> bool:
+        return separation is not None and separation[i] < SCRAPE_M
+
+    order = sorted(range(len(fixes)), key=lambda i: (scrape(i), h2[i], fixes[i].names))
     close = [i for i in order if h2[i] <= h2[order[0]] + tolerance]
     best = order[0]
     if separation is not None:
@@ -169,6 +176,9 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
 
 #: how much wider [m] an equally small fix must keep the ego's smallest gap to be preferred
 SEPARATION_MARGIN_M = 0.5
+#: a fix that leaves the ego closer than this [m] to any actor or object is a scrape (the
+#: catalog's chosen fixes keep 0.43 m or more: A2's passes a parked car at 0.43 m)
+SCRAPE_M = 0.25
 
 
 def _first_fix(res: SearchResult, h1_limit: float) -> int | None:

@@ -64,7 +64,8 @@ def _grid(lo: float, hi: float, points: int, integer: bool) -> list[Value]:
 
 def shrink_all_magnitudes(
     mutations: Sequence[Mutation], space: MutationSpace, holds: IndexedPredicate,
-    points: int = 7, rounds: int = 2,
+    points: int = 7, rounds: int = 2, contiguous: bool = False,
+    on_round: Callable[[list[Mutation]], None] | None = None,
 ) -> tuple[list[Mutation], int]:
     """Move each real or integer change of each fix towards its original value while it holds.
 
@@ -75,6 +76,12 @@ def shrink_all_magnitudes(
     points, 2 rounds: 1/64, the resolution of six bisection steps in two batches instead of
     six). All variables of all fixes go into one batch per round; a variable's trials keep the
     fix's other values as they were at the start of the round.
+
+    With ``contiguous`` a value is taken only when every grid value between it and the
+    current one holds as well: the change shrinks along the interval it holds on and stops at
+    the first value that fails, instead of jumping over failing values to an isolated one
+    nearer the original (an accident-free pocket between accidents, a race won by a hair).
+    ``on_round`` is called with the mutations after each round that changed any.
 
     Returns:
         (the shrunk mutations in the given order, the number of evaluations it took).
@@ -103,7 +110,10 @@ def shrink_all_magnitudes(
         updates: dict[int, dict[str, Value]] = {}
         for i, n, grid in groups:
             good = [next(ok) for _ in grid]
-            first = next((k for k, g in enumerate(good) if g), None)
+            if contiguous:
+                first = next((k for k in range(len(good)) if all(good[k:])), None)
+            else:
+                first = next((k for k, g in enumerate(good) if g), None)
             if first is None:
                 lo[(i, n)] = float(grid[-1])
             else:
@@ -112,6 +122,8 @@ def shrink_all_magnitudes(
                     lo[(i, n)] = float(grid[first - 1])
         for i, values in updates.items():
             current[i] = Mutation({**current[i].values, **values})
+        if updates and on_round is not None:
+            on_round(list(current))
     return current, evaluations
 
 
@@ -122,8 +134,11 @@ def shrink_set(mutation: Mutation, holds: BatchPredicate) -> tuple[Mutation, int
 
 
 def shrink_magnitudes(mutation: Mutation, space: MutationSpace, holds: BatchPredicate,
-                      points: int = 7, rounds: int = 2) -> tuple[Mutation, int]:
+                      points: int = 7, rounds: int = 2, contiguous: bool = False,
+                      on_round: Callable[[Mutation], None] | None = None
+                      ) -> tuple[Mutation, int]:
     """:func:`shrink_all_magnitudes` for one fix."""
     out, n = shrink_all_magnitudes([mutation], space,
-                                   lambda trials: holds([m for _, m in trials]), points, rounds)
+                                   lambda trials: holds([m for _, m in trials]), points, rounds,
+                                   contiguous, None if on_round is None else lambda ms: on_round(ms[0]))
     return out[0], n

@@ -129,3 +129,20 @@ def test_a_fix_is_known_only_when_its_whole_batch_has_run():
     assert _first_fix(early, 1.0) == 2 and _first_fix_batch(early, 1.0) == 4
     none = SearchResult(candidates=cands[:5], front=[], generations=res.generations)
     assert _first_fix_batch(none, 1.0) is None
+
+
+def test_a_fix_that_leaves_a_scrape_ranks_after_every_one_that_keeps_a_gap():
+    """An A11 variant: `idm_exponent` 4 -> 6.4 is the smallest fix (h2 1.34) but the ego
+    passes the truck at 6 cm; the collision check (h2 1.42) keeps 6.1 m and is the repair."""
+    from rocas.pipeline.cyber_phase import _smallest_fix
+
+    idm = Mutation({"planning.idm_exponent": 6.375})
+    check = Mutation({"planning.collision_check_moving_m": 1.75})
+    buffer = Mutation({"planning.lateral_safety_buffer_m": 2.03})
+    fixes = [idm, check, buffer]
+    assert fixes[_smallest_fix([1.339, 1.417, 1.577], fixes, separation=[0.06, 6.11, 6.86])[0]] == check
+    # a gap of SCRAPE_M or more is no scrape (A2's parked car passed at 0.43 m), and nothing
+    # near at all (an infinite gap) is none either
+    assert fixes[_smallest_fix([1.339, 1.417, 1.577], fixes, separation=[0.43, 6.11, 6.86])[0]] == idm
+    assert fixes[_smallest_fix([1.339, 1.417, 1.577], fixes,
+                               separation=[float("inf"), 6.11, 6.86])[0]] == idm

@@ -2,6 +2,7 @@
 screening's single-property mutants, and the shared prefix of two executions."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -82,3 +83,28 @@ def test_a_world_where_the_ego_stops_short_of_the_accident_is_no_reference():
     stalled = reference_violation(VariantResult(calm, waits, np.zeros((21, 0, 2))), 10.0)
     assert 0.5 < stalled <= 1.0
     assert reference_violation(VariantResult(crash, drives, np.zeros((21, 0, 2))), 10.0) > 1.0
+
+
+@pytest.mark.slow  # a whole analysis of A1 without validation (about 20 s)
+def test_a1_keeps_the_encounter_and_the_shrink_does_not_change_the_diffs_answer(tmp_path):
+    """The creeping car stopped avoids A1 and is the more similar world, but it takes the
+    encounter away; the car lifted keeps it. Shrunk to +0.19 m/s (0.49 m/s, still below the
+    still-obstacle speed) it avoids the accident another way: prediction no longer departs and
+    the diff names planning, so the shrink stops at the step where the same modules depart as
+    in the unshrunk reference's diff."""
+    from pathlib import Path
+
+    from rocas.pipeline import AnalyzeConfig, analyze
+    from rocas.search import SerialExecutor
+
+    rec = Path(__file__).resolve().parents[2] / "recordings" / "a01_creeping_car_junction.mcap"
+    cfg = AnalyzeConfig(validation_variants=0, alternate_references=0, second_opinion=False)
+    report = analyze(rec, tmp_path / "run", cfg, executor=SerialExecutor())
+    physical = json.loads((tmp_path / "run" / "physical.json").read_text())
+    (name, value), = physical["chosen"]["mutation"].items()
+    assert name.endswith(".speed_delta_mps") and value > 0
+    checked = physical["shrink_checked"]
+    assert checked[0]["module"] == "prediction" and "prediction" in checked[0]["departed"]
+    assert any("prediction" not in c["departed"] for c in checked[1:])
+    assert report["deviating_module"] == "prediction"
+    assert not list((tmp_path / "run").glob("shrink_*.mcap"))

@@ -1,10 +1,20 @@
 """The rule that picks the reference (and so the triggering entity) among the accident-free
-worlds the physical search found: objectives (f1, f2, f3, f4 = minus the shared prefix [s])."""
+worlds the physical search found: objectives (f1, f2, f3, f4 = minus the shared prefix [s],
+f5 = 1 when the accident's other party no longer gets to where it met the ego)."""
 
 import random
 
+import numpy as np
+import pytest
+
 from rocas.pipeline.physical import physical_space
-from rocas.pipeline.physical_phase import F2_TOLERANCE_M2, choose_reference, f2_tolerance
+from rocas.pipeline.physical_phase import (
+    F2_TOLERANCE_M2,
+    arc_positions,
+    choose_reference,
+    encounter_kept,
+    f2_tolerance,
+)
 from rocas.scenarios.catalog import entry
 from rocas.search.ga import Candidate
 from rocas.search.space import Mutation
@@ -65,3 +75,38 @@ def test_the_choice_does_not_depend_on_the_order_candidates_were_found_in():
         random.Random(k).shuffle(cands)
         assert choose_reference(cands, space) is first
     assert choose_reference([], space) is None
+
+
+def test_a_reference_that_keeps_the_encounter_wins_over_a_more_similar_one_that_takes_it_away():
+    """A1: the creeping car stopped is the more similar world (f2 1.9 against 22.1 m^2), but
+    the ego just drives past a car that never gets to where it hit the ego, and prediction,
+    whose fault the accident is, treats both as static; lifted, the car still gets there."""
+    space = physical_space(entry("A1").scenario)
+    speed = "actor.creeping_car.speed_delta_mps"
+    stopped = Candidate(Mutation({speed: -2.9}), (-2.87, 1.94, 1.37, -4.65, 1.0), -1.0, 0)
+    lifted = Candidate(Mutation({speed: 1.03}), (-2.87, 22.1, 1.13, -3.95, 0.0), -1.0, 0)
+    assert choose_reference([stopped, lifted], space) is lifted
+    assert choose_reference([stopped], space) is stopped
+
+
+def test_the_encounter_is_kept_when_the_other_party_still_gets_to_where_it_met_the_ego():
+    t = np.arange(0, 8.1, 0.05)[:, None]
+    creep = np.hstack([np.full_like(t, -1.75), 3.75 - 0.3 * t])  # southwards at 0.3 m/s
+    assert encounter_kept(creep, creep)
+    lifted = np.hstack([np.full_like(t, -1.75), 3.75 - 1.3 * t])
+    aside = creep + [0.8, 0.0]  # another line, as far along
+    assert encounter_kept(creep, lifted) and encounter_kept(creep, aside)
+    stopped = np.repeat(creep[:1], len(t), axis=0)
+    slower = np.hstack([np.full_like(t, -1.75), 3.75 - 0.1 * t])
+    beyond = creep - [0.0, 3.0]  # starts past the place where it met the ego
+    assert not encounter_kept(creep, stopped)
+    assert not encounter_kept(creep, slower)
+    assert not encounter_kept(creep, beyond)
+    parked = np.repeat(creep[:1], len(t), axis=0)
+    assert encounter_kept(parked, creep)  # a party that did not move keeps it trivially
+
+
+def test_positions_along_a_path_extend_past_both_ends():
+    path = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])
+    s = arc_positions(path, np.array([[-2.0, 1.0], [5.0, -3.0], [11.0, 4.0], [10.0, 13.0]]))
+    assert s == pytest.approx([-2.0, 5.0, 14.0, 23.0])

@@ -167,3 +167,20 @@ def test_executor_registry():
         make_executor("cluster")
     with pytest.raises(UsageError):
         LocalExecutor(workers=0)
+
+
+def test_a_contiguous_shrink_stops_at_the_first_value_that_fails():
+    """A value that holds beyond one that fails is an isolated pocket: the plain shrink jumps
+    to it, the contiguous one stays on the interval it holds on (physical references). The
+    grid from 2 towards the original 12 is 3.25, 4.5, 5.75, 7, 8.25, 9.5, 10.75."""
+    def holds(ms):
+        return [m.values["truck.speed"] <= 5.75 + 1e-9 or abs(m.values["truck.speed"] - 10.75) < 1e-9
+                for m in ms]
+
+    rounds = []
+    jumped, _ = shrink_magnitudes(Mutation({"truck.speed": 2.0}), SPACE, holds, rounds=1)
+    stayed, _ = shrink_magnitudes(Mutation({"truck.speed": 2.0}), SPACE, holds, rounds=1,
+                                  contiguous=True, on_round=rounds.append)
+    assert jumped.values["truck.speed"] == pytest.approx(10.75)
+    assert stayed.values["truck.speed"] == pytest.approx(5.75)
+    assert rounds == [stayed]
