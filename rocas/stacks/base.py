@@ -13,13 +13,16 @@ depends on another variant.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from rocas.errors import ScenarioError
+
+# what a stack receives and returns each step is the simulator's contract, one definition
+from rocas.sim.protocol import Actuation, MessageSink, Observation, StackRun  # noqa: F401
 
 #: recording attachment holding the static world (the scenario format without actors)
 WORLD_ATTACHMENT = "rocas/world.json"
@@ -80,77 +83,12 @@ class ChannelSpec:
     role: str | None = None
 
 
-@dataclass(frozen=True, eq=False)
-class Observation:
-    """What a stack receives each step (N variants, A actors).
-
-    Attributes:
-        tick: step index; t_s: its time [s].
-        ego_x, ego_y, ego_yaw, ego_speed, ego_accel: (N,) ego state [m, m, rad, m/s, m/s^2].
-        actor_x, actor_y, actor_yaw, actor_speed: (N, A) actor bodies [m, m, rad, m/s].
-        detail: the simulator's own state objects (``ego``, ``actors``, ``actor_state``), for
-            stacks that need more than the above (the built-in ADS's ground-truth substitutes).
-    """
-
-    tick: int
-    t_s: float
-    ego_x: np.ndarray
-    ego_y: np.ndarray
-    ego_yaw: np.ndarray
-    ego_speed: np.ndarray
-    ego_accel: np.ndarray
-    actor_x: np.ndarray
-    actor_y: np.ndarray
-    actor_yaw: np.ndarray
-    actor_speed: np.ndarray
-    detail: Mapping[str, Any]
-
-
-@dataclass(frozen=True, eq=False)
-class Actuation:
-    """What a stack returns each step, all (N,).
-
-    Attributes:
-        accel_mps2: demanded longitudinal acceleration [m/s^2] (negative brakes).
-        curvature_1pm: demanded path curvature [1/m] (positive turns left).
-        estop: the stack raised an emergency stop.
-        stop_justified: the stack's own plan names a traffic reason to stand (a red light, a
-            vehicle ahead); standing still >= 2 s without one is an unexpected stop.
-    """
-
-    accel_mps2: np.ndarray
-    curvature_1pm: np.ndarray
-    estop: np.ndarray
-    stop_justified: np.ndarray
-
-
-#: (topic, message, log time [ns]) -> None
-MessageSink = Callable[[str, Any, int], None]
 #: replay's view of the ego at one time: (t [s], x [m], y [m], yaw [rad], speed [m/s],
 #: longitudinal acceleration [m/s^2])
 PoseRow = tuple[float, float, float, float, float, float]
 #: one perceived agent at one time, world frame: (t [s], track id, x, y [m], heading [rad],
 #: vx, vy [m/s], length, width, height [m], kind ("vehicle", "bicycle", "pedestrian"), colour)
 AgentRow = tuple[float, int, float, float, float, float, float, float, float, float, str, str]
-
-
-@runtime_checkable
-class StackRun(Protocol):
-    """One stack instance driving N variants through one run."""
-
-    def step(self, obs: Observation) -> Actuation:
-        """Decide this step's actuation."""
-        ...
-
-    def publish(self, sink: MessageSink, tick: int, t_ns: int) -> None:
-        """Write variant 0's messages of the last step (recording mode only)."""
-        ...
-
-    def digest(self) -> dict[str, np.ndarray]:
-        """Per module, an (N,) fingerprint of what it published in the last step (modules
-        that did not run this step are absent); summed over a run it shows whether a
-        parameter changed a module's output."""
-        ...
 
 
 @runtime_checkable
