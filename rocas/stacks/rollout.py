@@ -18,17 +18,14 @@ import numpy as np
 from rocas.errors import UsageError
 from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
-from rocas.sim.actors import initial_actors, step_actors
-from rocas.sim.dynamics import VehicleState, bicycle_step
-from rocas.sim.oracles import Oracles, Outcome
-from rocas.sim.world import BatchWorld, compile_batch, reference_at, road_friction
+from rocas.sim.oracles import Outcome
+from rocas.sim.world import BatchWorld, compile_batch
 from rocas.stacks.base import (
     EGO_METADATA,
     RUN_METADATA,
     STACK_METADATA,
     WORLD_ATTACHMENT,
     MessageSink,
-    Observation,
     Stack,
     StackParams,
     batch_params,
@@ -71,60 +68,18 @@ def resolve(stack: Stack, overrides: Mapping[str, float] | StackParams | None,
     return StackParams(stack.parameters, overrides, source=source)
 
 
-def _initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleState:
-    s = np.array([sc.ego.start_s_m for sc in scenarios])
-    x, y, h, _ = reference_at(world.road, s)
-    d = np.array([sc.ego.start_lateral_m for sc in scenarios])
-    return VehicleState(x - d * np.sin(h), y + d * np.cos(h), h, h.copy(),
-                        np.array([sc.ego.start_speed_mps for sc in scenarios], dtype=float))
-
-
 def _loop(stack: Stack, world: BatchWorld, scenarios: Sequence[Scenario],
           sets: Sequence[StackParams], sink: MessageSink | None) -> Rollout:
-    n = world.batch_size
-    run = stack.build(world, batch_params(sets))
-    ego = _initial_ego(world, scenarios)
-    actors = initial_actors(world)
-    friction = road_friction(world.weather[:, 1])
-    oracles = Oracles(world, np.full(n, scenarios[0].ego.start_s_m))
-    steps, na = world.num_ticks, len(world.actor_ids)
-    ego_tr = np.zeros((n, steps + 1, 5))
-    act_tr = np.zeros((n, steps + 1, na, 4))
-    gap_tr = np.zeros((n, steps + 1))
-    accel = np.zeros(n)
-    digests: dict[str, np.ndarray] = {}
-    oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
+    """The simulator's own loop (:func:`rocas.sim.engine.rollout`) with ``stack`` built for
+    ``world``; the digests summed per module of the stack (zero for one that never ran)."""
+    from rocas.sim.engine import rollout as run_world
 
-    def record(i: int) -> None:
-        for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
-            ego_tr[:, i, j] = a
-        b = actors.body
-        for j, a in enumerate((b.x, b.y, b.yaw, b.speed)):
-            act_tr[:, i, :, j] = a
-        gap_tr[:, i] = oracles.last_gap
-
-    record(0)
-    dt_ns = round(world.dt_s * _NS)
-    for tick in range(steps):
-        t = tick * world.dt_s
-        b = actors.body
-        obs = Observation(tick, t, ego.x, ego.y, ego.yaw, ego.speed, accel, b.x, b.y, b.yaw,
-                          b.speed, {"ego": ego, "actors": b, "actor_state": actors})
-        act = run.step(obs)
-        if sink is not None:
-            run.publish(sink, tick, tick * dt_ns)
-        for name, value in run.digest().items():
-            digests[name] = digests.get(name, np.zeros(n)) + value
-        prev = ego
-        ego, accel = bicycle_step(ego, act.accel_mps2, act.curvature_1pm, friction, np.ones(n),
-                                  world.dt_s)
-        actors = step_actors(world, actors, t, prev, friction)
-        oracles.update(tick + 1, ego, accel, actors.body, act.estop, act.stop_justified)
-        record(tick + 1)
-    oracles.finish_route(ego_tr[..., :2])
-    return Rollout(times=np.arange(steps + 1) * world.dt_s, ego=ego_tr, actors=act_tr,
-                   min_gap=gap_tr, outcomes=oracles.outcomes(), digests=digests,
-                   actor_ids=world.actor_ids)
+    res = run_world(world, scenarios, stack.build(world, batch_params(sets)), sink=sink,
+                    digest_modules=stack.modules)
+    assert res.digests is not None
+    digests = {m: res.digests[:, k].copy() for k, m in enumerate(stack.modules)}
+    return Rollout(times=res.times, ego=res.ego, actors=res.actors, min_gap=res.min_gap,
+                   outcomes=res.outcomes, digests=digests, actor_ids=res.actor_ids)
 
 
 def rollout_batch(stack: Stack, scenarios: Scenario | Sequence[Scenario],
