@@ -77,22 +77,28 @@ class RunRecorder:
         self.count += 1
 
     def finish(self, outcome: Outcome) -> None:
-        self.writer.add_metadata(RUN_METADATA, {
-            "outcome": outcome.summary(),
-            "collided": str(outcome.collided).lower(),
-            "collision_with": outcome.collision_with or "",
-            "collision_time_s": _opt(outcome.collision_time_s),
-            "collision_kind": outcome.collision_kind or "",
-            "collision_position": "" if outcome.collision_position is None
-            else json.dumps([float(v) for v in outcome.collision_position]),
-            "emergency": str(outcome.emergency).lower(),
-            "hard_brake_time_s": _opt(outcome.hard_brake_time_s),
-            "estop_time_s": _opt(outcome.estop_time_s),
-            "unexpected_stop": str(outcome.unexpected_stop).lower(),
-            "max_decel_mps2": repr(outcome.max_decel_mps2),
-            "min_separation_m": repr(outcome.min_separation_m),
-            "route_completion": repr(outcome.route_completion),
-        })
+        """Write the run's outcome (the ``rocas.run`` record)."""
+        self.writer.add_metadata(RUN_METADATA, outcome_metadata(outcome))
+
+
+def outcome_metadata(outcome: Outcome) -> dict[str, str]:
+    """The ``rocas.run`` record of a run: what happened, as strings."""
+    return {
+        "outcome": outcome.summary(),
+        "collided": str(outcome.collided).lower(),
+        "collision_with": outcome.collision_with or "",
+        "collision_time_s": _opt(outcome.collision_time_s),
+        "collision_kind": outcome.collision_kind or "",
+        "collision_position": "" if outcome.collision_position is None
+        else json.dumps([float(v) for v in outcome.collision_position]),
+        "emergency": str(outcome.emergency).lower(),
+        "hard_brake_time_s": _opt(outcome.hard_brake_time_s),
+        "estop_time_s": _opt(outcome.estop_time_s),
+        "unexpected_stop": str(outcome.unexpected_stop).lower(),
+        "max_decel_mps2": repr(outcome.max_decel_mps2),
+        "min_separation_m": repr(outcome.min_separation_m),
+        "route_completion": repr(outcome.route_completion),
+    }
 
 
 def _opt(v: float | None) -> str:

@@ -19,6 +19,7 @@ from rocas.errors import UsageError
 from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
 from rocas.sim.oracles import Outcome
+from rocas.sim.recorder import outcome_metadata
 from rocas.sim.world import BatchWorld, compile_batch
 from rocas.stacks.base import (
     EGO_METADATA,
@@ -140,6 +141,7 @@ def rollout(stack: Stack, scenario: Scenario,
                    recording=str(output), messages=count)
 
 
+
 def ego_metadata(scenario: Scenario, params: StackParams, seed: int) -> dict[str, str]:
     """The ``rocas.ego`` record: the mission, the parameter overrides, seed and timing."""
     d = scenario_to_dict(scenario)
@@ -157,30 +159,6 @@ def ego_metadata(scenario: Scenario, params: StackParams, seed: int) -> dict[str
         "duration_s": repr(scenario.duration_s),
         "ego": json.dumps(d["ego"], sort_keys=True),
         "actors": json.dumps(d["actors"]),
-    }
-
-
-def _opt(v: float | None) -> str:
-    return "" if v is None else repr(v)
-
-
-def outcome_metadata(o: Outcome) -> dict[str, str]:
-    """The ``rocas.run`` record: what happened, as strings."""
-    return {
-        "outcome": o.summary(),
-        "collided": str(o.collided).lower(),
-        "collision_with": o.collision_with or "",
-        "collision_time_s": _opt(o.collision_time_s),
-        "collision_kind": o.collision_kind or "",
-        "collision_position": "" if o.collision_position is None
-        else json.dumps([float(v) for v in o.collision_position]),
-        "emergency": str(o.emergency).lower(),
-        "hard_brake_time_s": _opt(o.hard_brake_time_s),
-        "estop_time_s": _opt(o.estop_time_s),
-        "unexpected_stop": str(o.unexpected_stop).lower(),
-        "max_decel_mps2": repr(o.max_decel_mps2),
-        "min_separation_m": repr(o.min_separation_m),
-        "route_completion": repr(o.route_completion),
     }
 
 
