@@ -28,7 +28,7 @@ import json
 import math
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -772,7 +772,18 @@ def _log_lights(
     labels = [f"{tl['id']}: {c}" for s in states for tl, c in zip(lights, s, strict=True)]
     _over_time(rec, f"{w}/stop_lines", rr.LineStrips2D(lines, radii=0.3, draw_order=3.0), times,
                rr.LineStrips2D.columns(colors=colors).partition([n] * len(times)))
-    _over_time(rec, f"{w}/traffic_lights", rr.Points2D(heads, radii=0.9, draw_order=9.5), times,
+    _over_time(rec, f"{w}/traffic_lights", rr.Points2D(heads, radii=0.9, draw_order=9.5,
+                                                       show_labels=False), times,
+               rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)))
+    # the labels beside the lights, clear of them and of each other (rocas.viz.labels), at a
+    # spot chosen once for each light's longest text
+    from rocas.viz.labels import LabelItem, label_anchors, place_labels
+
+    items = [LabelItem(f"{tl['id']}: yellow", (float(x), float(y)), 1.2)
+             for tl, (x, y) in zip(lights, heads, strict=True)]
+    anchors = np.asarray(label_anchors(items, place_labels(items)), dtype=np.float64)
+    _over_time(rec, f"{w}/traffic_light_labels",
+               rr.Points2D(anchors, radii=0.05, draw_order=13.0, show_labels=True), times,
                rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)))
 
 
@@ -1018,6 +1029,13 @@ def _log_actors(
             )
 
 
+def first_frame_at(times: Sequence[float], t: float) -> int | None:
+    """Index of the frame a view at time ``t`` shows (the last one at or before it, which is
+    what Rerun's latest-at query returns), or None when ``t`` comes before every frame."""
+    k = int(np.searchsorted(np.asarray(times, dtype=float), t + 1e-9, side="right")) - 1
+    return k if k >= 0 else None
+
+
 def _log_labels(rec: Any, ex: Execution, prefix: str, texts: list[str], xy: np.ndarray,
                 size: np.ndarray, fill: list[tuple[int, ...]], mutated: list[bool], counts: list[int]
                 ) -> None:
@@ -1036,11 +1054,12 @@ def _log_labels(rec: Any, ex: Execution, prefix: str, texts: list[str], xy: np.n
             acc_item = (acc[0], LabelItem(f"{acc[1]} at {acc[0]:.2f} s",
                                           (float(pos[0]), float(pos[1])), 4.0))
     ego_r = float(np.hypot(EGO_LENGTH_M, EGO_WIDTH_M)) / 2
+    first = first_frame_at([f.t for f in ex.obstacles], acc_item[0]) if acc_item else None
     pos_rows, text_rows, color_rows, n_rows = [], [], [], []
     start = 0
-    for f, n in zip(ex.obstacles, counts, strict=True):
+    for i, (f, n) in enumerate(zip(ex.obstacles, counts, strict=True)):
         items: list[tuple[LabelItem, tuple[int, ...]]] = []
-        if acc_item is not None and f.t >= acc_item[0]:
+        if acc_item is not None and first is not None and i >= first:
             items.append((acc_item[1], ACCIDENT_COLOR))
         order = sorted(range(start, start + n), key=lambda k: not mutated[k])
         for k in order:

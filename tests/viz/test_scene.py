@@ -85,6 +85,8 @@ def test_traffic_lights_follow_their_policy(tmp_path):
         log_scene(rec, ex, "x")
     e, _ = read_rrd(out)
     assert e["/x/world/traffic_lights"].rows >= 1 and e["/x/world/stop_lines"].static_rows == 1
+    # each light's label is drawn beside it (placed clear of the light), one row per change
+    assert e["/x/world/traffic_light_labels"].rows == e["/x/world/traffic_lights"].rows
     cyc = {"mode": "cycle", "green_s": 8.0, "yellow_s": 3.0, "red_s": 8.0, "offset_s": 3.0}
     assert [light_color_at(cyc, True, t) for t in (0.0, 5.5, 8.5, 20.0)] == [
         "green",
@@ -161,3 +163,13 @@ def test_the_cyber_search_plots_are_named_h1_h2(tmp_path):
     e, _ = read_rrd(out)
     assert "/search/cyber/objectives/h1" in e and "/search/cyber/best/h2" in e
     assert not any(k.startswith("/search/cyber/objectives/f") for k in e)
+
+
+def test_the_accident_label_shows_in_the_frame_a_view_at_the_accident_time_shows():
+    from rocas.viz.scene import first_frame_at
+
+    times = [round(0.1 * k, 10) for k in range(130)]  # 10 Hz frames, as perception publishes
+    # a hard brake at 10.25 s: a view at 10.25 s shows the 10.2 s frame, which must carry it
+    assert times[first_frame_at(times, 10.25)] == 10.2
+    assert times[first_frame_at(times, 10.3)] == 10.3  # a frame at the very time is that one
+    assert first_frame_at(times, -0.5) is None
