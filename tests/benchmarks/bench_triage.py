@@ -41,6 +41,12 @@ def main() -> None:
                 hours = (time.perf_counter() - start) / 3600
             rates.setdefault(name, []).append(len(inputs) / hours)
             groups[name] = groups_signature(campaign)
+            sc = campaign.get("scores")
+            if sc:
+                print(f"{name:>5}: completeness {100 * sc['completeness']:.1f} % (worst type "
+                      f"{100 * sc['worst_completeness']:.0f} %), purity {100 * sc['purity']:.1f} % "
+                      f"(worst group {100 * sc['worst_purity']:.0f} %), {len(campaign['groups'])} groups",
+                      flush=True)
         r = rates[name]
         print(f"{name:>5}: {len(inputs)} accidents, min {min(r):.0f} / median "
               f"{statistics.median(r):.0f} accidents per hour ({args.workers} workers)", flush=True)
