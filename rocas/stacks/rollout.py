@@ -8,7 +8,6 @@ stack is anything that satisfies :class:`rocas.stacks.base.Stack`.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -16,16 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas.errors import UsageError
-from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
 from rocas.sim.oracles import Outcome
-from rocas.sim.recorder import outcome_metadata
 from rocas.sim.world import BatchWorld, compile_batch
 from rocas.stacks.base import (
-    EGO_METADATA,
-    RUN_METADATA,
     STACK_METADATA,
-    WORLD_ATTACHMENT,
     MessageSink,
     Stack,
     StackParams,
@@ -110,56 +104,20 @@ def rollout(stack: Stack, scenario: Scenario,
             *, output: str | os.PathLike[str] | None = None) -> Rollout:
     """Simulate one run; with ``output``, write every channel of ``stack`` to an MCAP file
     with the topology, the static world attachment, the stack's name and the outcome."""
-    from rocas.recording.writer import RecordingWriter
+    from rocas.sim.recorder import RunRecorder
 
     seed = scenario.seed if seed is None else seed
     world = compile_batch([scenario], [seed])
     pset = resolve(stack, params, f"scenario {scenario.name}")
     if output is None:
         return _loop(stack, world, [scenario], [pset], None)
-    count = 0
-    with RecordingWriter(output) as writer:
-        for ch in stack.channels:
-            writer.add_channel(ch.topic, ch.message_type, writers=[ch.writer],
-                               readers=list(ch.readers), role=ch.role,
-                               metadata={"rocas.period_s": f"{ch.period_s:g}"})
-        writer.add_attachment(WORLD_ATTACHMENT,
-                              json.dumps(world_to_dict(scenario), indent=1).encode(),
-                              media_type="application/json")
-        writer.add_metadata(STACK_METADATA, {"name": stack.name})
-        writer.add_metadata(EGO_METADATA, ego_metadata(scenario, pset, seed))
-
-        def sink(topic: str, msg: object, t_ns: int) -> None:
-            nonlocal count
-            writer.write(topic, msg, log_time_ns=t_ns)
-            count += 1
-
-        res = _loop(stack, world, [scenario], [pset], sink)
-        writer.add_metadata(RUN_METADATA, outcome_metadata(res.outcomes[0]))
+    with RunRecorder(output, scenario, stack.channels, pset.overrides(), seed) as rec:
+        rec.writer.add_metadata(STACK_METADATA, {"name": stack.name})
+        res = _loop(stack, world, [scenario], [pset], rec.write)
+        rec.finish(res.outcomes[0])
     return Rollout(times=res.times, ego=res.ego, actors=res.actors, min_gap=res.min_gap,
                    outcomes=res.outcomes, digests=res.digests, actor_ids=res.actor_ids,
-                   recording=str(output), messages=count)
-
-
-
-def ego_metadata(scenario: Scenario, params: StackParams, seed: int) -> dict[str, str]:
-    """The ``rocas.ego`` record: the mission, the parameter overrides, seed and timing."""
-    d = scenario_to_dict(scenario)
-    return {
-        "scenario": scenario.name,
-        "route": ",".join(scenario.ego.route),
-        "start_s_m": repr(scenario.ego.start_s_m),
-        "start_lateral_m": repr(scenario.ego.start_lateral_m),
-        "start_speed_mps": repr(scenario.ego.start_speed_mps),
-        "destination_s_m": "" if scenario.ego.destination_s_m is None
-        else repr(scenario.ego.destination_s_m),
-        "params": json.dumps(params.overrides(), sort_keys=True),
-        "seed": str(seed),
-        "dt_s": repr(scenario.dt_s),
-        "duration_s": repr(scenario.duration_s),
-        "ego": json.dumps(d["ego"], sort_keys=True),
-        "actors": json.dumps(d["actors"]),
-    }
+                   recording=str(output), messages=rec.count)
 
 
 # -- by the scenario's stack: what the pipeline calls ------------------------------------------
