@@ -8,43 +8,17 @@ immutable mapping name -> value with every parameter present; a batch of N param
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from rocas.errors import ScenarioError
+from rocas.stacks.base import ParamSpec
 
 MODULES = ("localization", "canbus", "perception", "prediction", "planning", "control")
 
 
-@dataclass(frozen=True)
-class Param:
-    """One ADS parameter.
-
-    Attributes:
-        module: module that reads it.
-        name: name within the module.
-        default: default value.
-        low, high: inclusive range a search may explore.
-        unit: SI unit ("" when dimensionless, "bool" for 0/1 switches, "enum" for choices).
-        description: one line.
-    """
-
-    module: str
-    name: str
-    default: float
-    low: float
-    high: float
-    unit: str
-    description: str
-
-    @property
-    def full_name(self) -> str:
-        return f"{self.module}.{self.name}"
-
-    @property
-    def is_integer(self) -> bool:
-        return self.unit in ("bool", "enum", "frames")
+#: one ADS parameter: the stacks' parameter declaration (module, name, default, range, unit)
+Param = ParamSpec
 
 
 _P = Param

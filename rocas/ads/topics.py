@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 from rocas.msgs import (
     chassis_pb2,
     control_pb2,
@@ -18,6 +15,7 @@ from rocas.msgs import (
 from rocas.recording.topology import EGO_METADATA as EGO_METADATA
 from rocas.recording.topology import RUN_METADATA as RUN_METADATA
 from rocas.recording.topology import WORLD_ATTACHMENT as WORLD_ATTACHMENT
+from rocas.stacks.base import ChannelSpec
 
 LOCALIZATION = "localization"
 CANBUS = "canbus"
@@ -36,16 +34,9 @@ TOPIC_PLANNING = "/planning"
 TOPIC_CONTROL = "/control"
 
 
-@dataclass(frozen=True)
-class Channel:
-    """A channel of the built-in ADS: who writes it, who reads it, its period."""
-
-    topic: str
-    message_type: type[Any]
-    writer: str
-    readers: tuple[str, ...]
-    period_s: float
-    role: str | None = None
+#: a channel of the built-in ADS: the stacks' channel declaration (topic, type, writer,
+#: readers, period, role)
+Channel = ChannelSpec
 
 
 CHANNELS: tuple[Channel, ...] = (

@@ -20,12 +20,8 @@ class AdsStackAdapter:
         from rocas.ads import params, topics
 
         self.modules: tuple[str, ...] = params.MODULES
-        self.parameters: tuple[ParamSpec, ...] = tuple(
-            ParamSpec(p.module, p.name, p.default, p.low, p.high, p.unit, p.description)
-            for p in params.parameters())
-        self.channels: tuple[ChannelSpec, ...] = tuple(
-            ChannelSpec(c.topic, c.message_type, c.writer, c.readers, c.period_s, c.role)
-            for c in topics.CHANNELS)
+        self.parameters: tuple[ParamSpec, ...] = tuple(params.parameters())  # ads Param is ParamSpec
+        self.channels: tuple[ChannelSpec, ...] = topics.CHANNELS  # ads Channel is ChannelSpec
 
     def build(self, world: object, params: Mapping[str, np.ndarray]) -> AdsRun:
         return AdsRun(world, params)
