@@ -51,6 +51,8 @@ from rocas.scenarios.catalog import (
     fix_holds,
     mutate,
     scenario_toml,
+    toml_key,
+    toml_value,
 )
 from rocas.scenarios.families import FAMILIES as FAMILY_HELP
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
@@ -350,31 +352,6 @@ def generate_variants(e: CatalogEntry, family: str, count: int, *, seed: int = 0
 
 # --- files ---------------------------------------------------------------------------------------
 
-def _key(k: str) -> str:
-    import re
-
-    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _value(k)
-
-
-def _value(v: Any) -> str:
-    import json
-
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, list | tuple):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    if isinstance(v, Mapping):
-        return "{ " + ", ".join(f"{_key(str(k))} = {_value(x)}" for k, x in v.items()
-                                if x is not None) + " }"
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
-
-
 def truth_document(t: GroundTruth) -> dict[str, Any]:
     """The ``[ground_truth]`` table of a ground truth (the keys the catalog reads)."""
     d: dict[str, Any] = {
@@ -394,12 +371,12 @@ def variant_toml(v: Variant) -> str:
     ``[ground_truth]`` table (so ``rocas simulate``/``analyze --scenario`` take it as they take
     a catalog entry)."""
     head = (f"# {v.family} variant {v.index} (seed {v.seed}) of catalog entry {v.source.id} "
-            f"({v.source.key}): {_value(dict(v.changes))}\n"
+            f"({v.source.key}): {toml_value(dict(v.changes))}\n"
             f"# kept because it crashes as documented and a documented fix repairs it "
             f"(re-simulated); the moved reference mutation "
             f"{'avoids' if v.reference_avoids else 'does NOT avoid'} it\n")
     truth = truth_document(v.entry.truth)
-    lines = ["[ground_truth]"] + [f"{_key(k)} = {_value(x)}" for k, x in truth.items()]
+    lines = ["[ground_truth]"] + [f"{toml_key(k)} = {toml_value(x)}" for k, x in truth.items()]
     return head + scenario_toml(v.scenario) + "\n" + "\n".join(lines) + "\n"
 
 

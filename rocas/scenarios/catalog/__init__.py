@@ -398,7 +398,15 @@ __all__ = ["PRE_ACCIDENT_MARGIN_S", "PRE_ACCIDENT_RMSE_M", "CatalogEntry", "Grou
 
 # --- writing variants back as scenario files ---------------------------------------------------
 
-def _toml_value(v: Any) -> str:
+def toml_key(k: str) -> str:
+    """A TOML key: bare when it can be, else quoted (a dotted name is one key, not a path)."""
+    import re
+
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
+
+
+def toml_value(v: Any) -> str:
+    """A TOML value (inline tables and arrays included; None entries of a table are left out)."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int | float):
@@ -406,9 +414,9 @@ def _toml_value(v: Any) -> str:
     if isinstance(v, str):
         return json.dumps(v)
     if isinstance(v, list | tuple):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
     if isinstance(v, Mapping):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()
+        return "{ " + ", ".join(f"{toml_key(str(k))} = {toml_value(x)}" for k, x in v.items()
                                 if x is not None) + " }"
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
@@ -423,7 +431,7 @@ def scenario_toml(scenario: Scenario) -> str:
         for k, v in d.items():
             if v is None or isinstance(v, Mapping) and header == "[ego]":
                 continue
-            lines.append(f"{k} = {_toml_value(v)}")
+            lines.append(f"{k} = {toml_value(v)}")
         lines.append("")
 
     table("[scenario]", doc["scenario"])
