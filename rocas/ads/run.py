@@ -37,15 +37,16 @@ class AdsRun:
 
     Args:
         world: the compiled batch.
-        param_sets: one full parameter assignment per variant.
+        params: every parameter as an (N,) array, one value per variant
+            (:func:`rocas.ads.params.stack_params` of one full assignment per variant).
         oracle_modules: modules whose output is replaced by ground truth (module
             substitution, :mod:`rocas.ads.oracle`): one set for every variant or one per
             variant; empty runs the ADS as it is.
     """
 
-    def __init__(self, world: BatchWorld, param_sets: Sequence[ParamSet],
+    def __init__(self, world: BatchWorld, params: Mapping[str, np.ndarray],
                  oracle_modules: OracleModules = frozenset()) -> None:
-        self.stack = AdsStack(world, stack_params(param_sets), oracle_modules)
+        self.stack = AdsStack(world, dict(params), oracle_modules)
         self.out: TickOutputs | None = None
         self._prev_xy: tuple[np.ndarray, np.ndarray] | None = None
         self._publisher: AdsPublisher | None = None
@@ -146,7 +147,7 @@ def ads_factory(param_sets: Sequence[ParamSet], oracle_modules: OracleModules = 
                 ) -> Callable[[BatchWorld], AdsRun]:
     """A :data:`rocas.sim.protocol.StackFactory` of the built-in ADS with one parameter set
     per variant."""
-    return lambda world: AdsRun(world, param_sets, oracle_modules)
+    return lambda world: AdsRun(world, stack_params(param_sets), oracle_modules)
 
 
 __all__ = ["MODULE_ORDER", "AdsRun", "BatchResult", "ParamsLike", "RunResult", "ads_factory",

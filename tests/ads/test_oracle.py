@@ -5,6 +5,7 @@ import pytest
 
 from rocas.ads import classifier
 from rocas.ads.oracle import SUBSTITUTABLE
+from rocas.ads.params import stack_params
 from rocas.ads.perception import sim_light_to_tl
 from rocas.ads.prediction import perceived_world_state
 from rocas.ads.run import AdsRun, resolve_params, simulate_batch
@@ -18,7 +19,7 @@ from rocas.sim.world import compile_batch, light_state
 def _outputs(scenario, oracle_modules):
     """One run with its stack outputs at every perception step: {tick: TickOutputs}."""
     world = compile_batch([scenario], [scenario.seed])
-    run = AdsRun(world, [resolve_params(scenario, None)], oracle_modules)
+    run = AdsRun(world, stack_params([resolve_params(scenario, None)]), oracle_modules)
     seen = {}
 
     def keep(tick):
