@@ -126,7 +126,7 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     for k, params in enumerate(configs):
         if not valid[k]:
             continue
-        if sweep_settled(ok_fixed, [r for r in rates[:k] if r is not None], more=True):
+        if sweep_settled(ok_fixed, [r for r in rates[:k] if r is not None]):
             skipped[k] = "the robust value was settled by the closer values"
             sims.planned -= n
             continue
@@ -161,14 +161,14 @@ def _qualifies(rate: float, best: float, minimal: bool) -> bool:
     return rate > best - ROBUST_TOLERANCE if minimal else rate >= best - ROBUST_TOLERANCE
 
 
-def sweep_settled(fixed_rate: float | None, rates: list[float], more: bool) -> bool:
+def sweep_settled(fixed_rate: float | None, rates: list[float]) -> bool:
     """Whether the robust value is already decided by the minimal fix's success rate and the
     ``rates`` of the valid stronger values so far (closest first), whatever the rates of the
-    ``more`` values still to come: some value (the minimal fix counts as the first) is within the
+    values still to come: some value (the minimal fix counts as the first) is within the
     tolerance even of a perfect rate, and every closer one falls short even of the best seen so
     far. The best can only grow, so these stay true: :func:`_robust` of the whole sweep picks
     the same value."""
-    if fixed_rate is None or not more:
+    if fixed_rate is None:
         return True
     seen = [fixed_rate] + rates
     best = max(seen)

@@ -161,7 +161,7 @@ def test_the_sweep_stops_only_when_the_rest_cannot_change_the_robust_value():
         # what the phase runs: each value only while the sweep is not settled
         run = []
         for k in range(len(rates)):
-            if sweep_settled(fixed, run, more=True):
+            if sweep_settled(fixed, run):
                 break
             run.append(rates[k])
         stopped += len(run) < len(rates)
@@ -173,8 +173,8 @@ def test_the_sweep_stops_only_when_the_rest_cannot_change_the_robust_value():
 
 
 def test_the_sweep_is_settled_by_a_minimal_fix_that_cannot_be_beaten_by_the_tolerance():
-    assert sweep_settled(0.97, [], more=True)  # nothing can be 0.05 better than 0.97
-    assert not sweep_settled(0.90, [], more=True)
+    assert sweep_settled(0.97, [])  # nothing can be 0.05 better than 0.97
+    assert not sweep_settled(0.90, [])
     # 0.96 is within 0.05 of any rate; 0.85 falls short of 0.96 by more: 0.25 is the robust one
-    assert sweep_settled(0.625, [0.85, 0.96], more=True)
-    assert not sweep_settled(0.625, [0.85, 0.93], more=True)  # a later 1.0 would rule out 0.93
+    assert sweep_settled(0.625, [0.85, 0.96])
+    assert not sweep_settled(0.625, [0.85, 0.93])  # a later 1.0 would rule out 0.93
