@@ -14,6 +14,7 @@ import os
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from rocas._fs import check_writable
@@ -164,15 +165,7 @@ def _serve_web(out: Path, args: argparse.Namespace, env: Env) -> int:
     rr.serve_web_viewer(web_port=args.web_port, open_browser=False, connect_to=url)
     rec.log_file_from_path(out)
     address = f"http://localhost:{args.web_port}/?url={url}"
-    env.out().print(f"Rerun web viewer: {address}")
-    env.out().print("Serving until Ctrl-C.")
-    env.stdout.flush()
-    try:
-        while True:
-            time.sleep(1.0)
-    except KeyboardInterrupt:
-        rec.disconnect()
-        return 0
+    return _serve_until_interrupt(env, f"Rerun web viewer: {address}", rec.disconnect)
 
 
 def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> int:
@@ -184,12 +177,17 @@ def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> i
                          f"rocas view --web {campaign_dir}")
     server = CampaignServer(campaign_dir, port=args.page_port, web_viewer_port=args.web_port)
     server.start()
-    env.out().print(f"Campaign view: {server.url}")
+    return _serve_until_interrupt(env, f"Campaign view: {server.url}", server.stop)
+
+
+def _serve_until_interrupt(env: Env, where: str, stop: Callable[[], object]) -> int:
+    """Say where the page is, then wait for Ctrl-C and ``stop`` the server (exit 0)."""
+    env.out().print(where)
     env.out().print("Serving until Ctrl-C.")
     env.stdout.flush()
     try:
         while True:
             time.sleep(1.0)
     except KeyboardInterrupt:
-        server.stop()
+        stop()
         return 0
