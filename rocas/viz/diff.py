@@ -41,6 +41,9 @@ FADED = (150, 150, 150, 110)
 WALK_DOT_STEP, REMOVED_DOT_STEP = 7.0, 11.0
 #: Radius of those dots [points].
 WALK_DOT_RADIUS, REMOVED_DOT_RADIUS = 3.0, 1.8
+#: How far the marks' frame reaches above the nodes' frame, so that the graph view's two entity
+#: paths (written above each frame) are a line apart [points].
+MARKS_FRAME_TOP = 30.0
 #: Seconds shown around the change points when the MDR view opens [s].
 MDR_MARGIN_S = 1.5
 
@@ -271,6 +274,14 @@ def cmg_drawing(result: DiffResult) -> CmgDrawing:
     )
 
 
+def marks_frame(node_extent: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1) of the marks' frame: the nodes' frame with 8 points around it and
+    :data:`MARKS_FRAME_TOP` above it (the graph view's y axis points down) [points]."""
+    margins = (-8.0, -MARKS_FRAME_TOP, 8.0, 8.0)
+    x0, y0, x1, y1 = (v + m for v, m in zip(node_extent, margins, strict=True))
+    return x0, y0, x1, y1
+
+
 def log_cmg(rec: Any, result: DiffResult, prefix: str = "diff") -> CmgDrawing:
     """Log the laid-out CMG under ``<prefix>/cmg`` (static); returns the drawing."""
     import rerun as rr
@@ -284,11 +295,12 @@ def log_cmg(rec: Any, result: DiffResult, prefix: str = "diff") -> CmgDrawing:
         static=True,
     )
     # The dots of the walk and of the removed edges are a second entity (one entity's labels
-    # are all shown or all hidden). The graph view frames each entity's extent; two invisible
-    # dots on the corners of the nodes' extent make both frames one.
+    # are all shown or all hidden). The graph view frames each entity's extent and writes its
+    # path above the frame's top-left corner; two invisible dots on the corners make the marks'
+    # frame enclose the nodes' frame, MARKS_FRAME_TOP higher so the two paths do not overlap.
     n_walk, n_rem = len(d.walk_dots), len(d.removed_dots)
     if n_walk + n_rem:
-        x0, y0, x1, y1 = (v + m for v, m in zip(d.node_extent, (-8, -8, 8, 8), strict=True))
+        x0, y0, x1, y1 = marks_frame(d.node_extent)
         rec.log(
             f"{prefix}/cmg/marks",
             rr.GraphNodes(

@@ -85,3 +85,13 @@ def test_long_names_break_after_a_separator():
     label = node_label("/perception/traffic_light", None)
     assert label.split("\n") == ["/perception/", "traffic_light", "t* = none"]
     assert label_size(label)[0] < label_size("/perception/traffic_light")[0]
+
+
+def test_the_marks_frame_encloses_the_nodes_with_room_above_for_both_entity_paths():
+    from rocas.viz.diff import MARKS_FRAME_TOP, marks_frame
+
+    nodes = (-50.0, 10.0, 70.0, 400.0)
+    x0, y0, x1, y1 = marks_frame(nodes)
+    assert x0 < nodes[0] and x1 > nodes[2] and y1 > nodes[3]
+    # the graph view writes each entity's path above its frame (y points down): a line apart
+    assert nodes[1] - y0 == MARKS_FRAME_TOP >= 24.0
