@@ -44,6 +44,8 @@ WALK_DOT_RADIUS, REMOVED_DOT_RADIUS = 3.0, 1.8
 #: How far the marks' frame reaches above the nodes' frame, so that the graph view's two entity
 #: paths (written above each frame) are a line apart [points].
 MARKS_FRAME_TOP = 30.0
+#: Room above a frame for the entity path the graph view writes there [points].
+ENTITY_PATH_LINE = 45.0
 #: Seconds shown around the change points when the MDR view opens [s].
 MDR_MARGIN_S = 1.5
 
@@ -155,7 +157,8 @@ class CmgDrawing:
         removed_dots: (m, 2) points along the removed edges [points]; removed_labels: (m,)
             which edge each dot belongs to and why it was removed.
         node_extent: (x0, y0, x1, y1) of the nodes' boxes [points].
-        bounds: the same with a margin [points].
+        bounds: what the view shows: the nodes' boxes with a margin, and above them the marks'
+            frame and the line of its entity path [points].
     """
 
     nodes: tuple[Node, ...]
@@ -259,6 +262,8 @@ def cmg_drawing(result: DiffResult) -> CmgDrawing:
             pts = _dots(*segment(u, v), REMOVED_DOT_STEP)[1:-1]
             rem_pts.append(pts)
             rem_labels += [f"removed {u[1]} → {v[1]}: {why}"] * len(pts)
+    extent = cmg_layout.bounds(boxes, margin=0.0)
+    x0, y0, x1, y1 = cmg_layout.bounds(boxes)
     return CmgDrawing(
         nodes=nodes,
         ids=tuple(_node_id(n) for n in nodes),
@@ -269,8 +274,8 @@ def cmg_drawing(result: DiffResult) -> CmgDrawing:
         walk_dots=np.concatenate(walk_pts) if walk_pts else np.zeros((0, 2)),
         removed_dots=np.concatenate(rem_pts) if rem_pts else np.zeros((0, 2)),
         removed_labels=tuple(rem_labels),
-        node_extent=cmg_layout.bounds(boxes, margin=0.0),
-        bounds=cmg_layout.bounds(boxes),
+        node_extent=extent,
+        bounds=(x0, min(y0, marks_frame(extent)[1] - ENTITY_PATH_LINE), x1, y1),
     )
 
 

@@ -95,3 +95,17 @@ def test_the_marks_frame_encloses_the_nodes_with_room_above_for_both_entity_path
     assert x0 < nodes[0] and x1 > nodes[2] and y1 > nodes[3]
     # the graph view writes each entity's path above its frame (y points down): a line apart
     assert nodes[1] - y0 == MARKS_FRAME_TOP >= 24.0
+
+
+def test_the_view_opens_on_the_nodes_and_both_frames_with_their_entity_paths(tmp_path):
+    from foreign_stack import make_pair
+
+    from rocas.analysis import diff
+    from rocas.viz.diff import ENTITY_PATH_LINE, cmg_drawing, marks_frame
+
+    pair = make_pair(tmp_path, deviating="forecaster")
+    d = cmg_drawing(diff(pair.accident, pair.reference))
+    fx0, fy0, fx1, fy1 = marks_frame(d.node_extent)
+    bx0, by0, bx1, by1 = d.bounds
+    assert bx0 <= fx0 and bx1 >= fx1 and by1 >= fy1
+    assert by0 <= fy0 - ENTITY_PATH_LINE  # the marks' entity path is inside the view
