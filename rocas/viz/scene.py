@@ -740,12 +740,44 @@ def log_world(
         )
     lights = [tl for tl in world.get("traffic_lights", []) if tl.get("stop_lane") in pts]
     if lights:
-        _log_lights(rec, w, lights, pts, duration_s, float(world.get("scenario", {}).get("dt_s", 0.05)))
+        road = road_patches(lanes, pts, [tuple(tl["position"]) for tl in lights])
+        _log_lights(rec, w, lights, pts, duration_s, float(world.get("scenario", {}).get("dt_s", 0.05)),
+                    road)
     _log_world_highlight(rec, w, world, pts, highlight)
 
 
+#: Labels near a light keep off the road within this distance of it [m], where stop lines and
+#: queued cars are; the road is tested in squares this far apart along each lane [m].
+ROAD_CLEAR_RADIUS_M, ROAD_PATCH_STEP_M = 25.0, 1.5
+
+
+def road_patches(
+    lanes: list[dict[str, Any]], pts: dict[str, np.ndarray], near: list[tuple[float, float]],
+    radius_m: float = ROAD_CLEAR_RADIUS_M, step_m: float = ROAD_PATCH_STEP_M,
+) -> list[tuple[float, float, float, float]]:
+    """Squares (x0, y0, x1, y1) [m] covering the lanes' surface within ``radius_m`` of any point
+    of ``near``: one square of the lane's width every ``step_m`` along each lane."""
+    if not near:
+        return []
+    centers = np.asarray(near, dtype=np.float64).reshape(-1, 2)
+    out: list[tuple[float, float, float, float]] = []
+    for ln in lanes:
+        line = pts[ln["id"]]
+        if len(line) < 2:
+            continue
+        half = float(ln.get("width_m", 3.5)) / 2
+        seg = np.linalg.norm(np.diff(line, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(seg)])
+        s = np.arange(0.0, cum[-1] + step_m / 2, step_m)
+        xy = np.column_stack([np.interp(s, cum, line[:, 0]), np.interp(s, cum, line[:, 1])])
+        d = np.min(np.linalg.norm(xy[:, None, :] - centers[None, :, :], axis=2), axis=1)
+        out += [(x - half, y - half, x + half, y + half) for x, y in xy[d <= radius_m + half]]
+    return out
+
+
 def _log_lights(
-    rec: Any, w: str, lights: list[dict[str, Any]], pts: dict[str, np.ndarray], duration_s: float, dt_s: float
+    rec: Any, w: str, lights: list[dict[str, Any]], pts: dict[str, np.ndarray], duration_s: float,
+    dt_s: float, road: Sequence[tuple[float, float, float, float]] = (),
 ) -> None:
     import rerun as rr
 
@@ -775,13 +807,14 @@ def _log_lights(
     _over_time(rec, f"{w}/traffic_lights", rr.Points2D(heads, radii=0.9, draw_order=9.5,
                                                        show_labels=False), times,
                rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)))
-    # the labels beside the lights, clear of them and of each other (rocas.viz.labels), at a
-    # spot chosen once for each light's longest text
+    # the labels beside the lights, clear of them, of each other and of the road around them
+    # (stop lines, queued cars; rocas.viz.labels), at a spot chosen once for each light's
+    # longest text
     from rocas.viz.labels import LabelItem, label_anchors, place_labels
 
     items = [LabelItem(f"{tl['id']}: yellow", (float(x), float(y)), 1.2)
              for tl, (x, y) in zip(lights, heads, strict=True)]
-    anchors = np.asarray(label_anchors(items, place_labels(items)), dtype=np.float64)
+    anchors = np.asarray(label_anchors(items, place_labels(items, obstacles=road)), dtype=np.float64)
     _over_time(rec, f"{w}/traffic_light_labels",
                rr.Points2D(anchors, radii=0.05, draw_order=13.0, show_labels=True), times,
                rr.Points2D.columns(colors=colors, labels=labels).partition([n] * len(times)))

@@ -173,3 +173,23 @@ def test_the_accident_label_shows_in_the_frame_a_view_at_the_accident_time_shows
     assert times[first_frame_at(times, 10.25)] == 10.2
     assert times[first_frame_at(times, 10.3)] == 10.3  # a frame at the very time is that one
     assert first_frame_at(times, -0.5) is None
+
+
+@pytest.mark.parametrize("name", ["a07_rear_ended_at_red", "a10_skewed_junction_light"])
+def test_a_light_label_keeps_off_the_road_around_the_light(name):
+    # A7's label used to sit on the stop line and on the car queued at the light
+    from pathlib import Path
+
+    from rocas.viz.labels import LabelItem, label_rects, place_labels
+    from rocas.viz.scene import road_patches
+
+    path = Path(__file__).parents[2] / "recordings" / f"{name}.mcap"
+    world = load_execution(path).world
+    lanes = world["lanes"]
+    pts = {ln["id"]: np.asarray(ln["points"], dtype=np.float64) for ln in lanes}
+    lights = world["traffic_lights"]
+    road = road_patches(lanes, pts, [tuple(tl["position"]) for tl in lights])
+    assert road  # the lights stand by a road
+    items = [LabelItem(f"{tl['id']}: yellow", tuple(tl["position"]), 1.2) for tl in lights]
+    for x0, y0, x1, y1 in label_rects(items, place_labels(items, obstacles=road)):
+        assert not any(x0 < b[2] and b[0] < x1 and y0 < b[3] and b[1] < y1 for b in road)
