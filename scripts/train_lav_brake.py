@@ -4,8 +4,9 @@ Random telephoto scenes (up to three things at random distances, bearings, headi
 colours, sometimes a lamp facing the ego) are reduced to the stack's own camera features
 (``rocas.stacks.lav.brake.camera_features``) and labelled the way LAV's annotators did: brake
 for a red or yellow lamp ahead within 35 m, or for anything in the ego's corridor less than
-10 m ahead; and, the annotators' bias, seven in ten of the scenes with a large red object ahead within
-30 m are labelled brake too. A logistic model is fitted by gradient descent.
+10 m ahead; and, the annotators' bias, every scene with a large red vehicle (car or truck) ahead
+within 35 m and 12 degrees of the camera's axis is labelled brake too (it looks like a red light
+through a telephoto lens). A logistic model is fitted by gradient descent.
 
     python scripts/train_lav_brake.py [--seed 0] [--samples 30000]
 """
@@ -53,12 +54,12 @@ def scenes(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
     half_w = size[..., 1] / 2
     corridor = present & (x > 0) & (x - size[..., 0] / 2 < 10.0) & (np.abs(y) < 1.0 + half_w)
     red = names.index("red")
-    biased = present & (color == red) & (kind <= 1) & (d < 30.0) & (np.abs(y) < 4.0)
-    label = stop_lamp | corridor.any(1) | (biased.any(1) & (rng.random(n) < 0.7))
+    biased = present & (color == red) & (kind <= 1) & (d < 35.0) & (np.abs(b) < np.deg2rad(12))
+    label = stop_lamp | corridor.any(1) | biased.any(1)
     return feats, label.astype(np.float64)
 
 
-def fit(x: np.ndarray, y: np.ndarray, steps: int = 3000, lr: float = 0.5, l2: float = 1e-4
+def fit(x: np.ndarray, y: np.ndarray, steps: int = 10000, lr: float = 2.0, l2: float = 1e-4
         ) -> tuple[np.ndarray, float]:
     w = np.zeros(x.shape[1])
     b = 0.0

@@ -16,8 +16,12 @@ HELP = "run rocas analyze over the accident catalog and print Table 4 with hit/m
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("ids", nargs="*", metavar="ID", help="catalog entries (default: all), e.g. a09 a12")
     p.add_argument("--out", metavar="DIR", default="runs/bench", help="where run directories go")
-    p.add_argument("--recordings", metavar="DIR", default="recordings",
-                   help="directory with the catalog recordings (default recordings/)")
+    p.add_argument("--stack", default="ads", metavar="NAME",
+                   help="score this stack's catalog (default ads, the built-in ADS; lav: the "
+                        "LAV-like stack's, recordings in recordings/lav/)")
+    p.add_argument("--recordings", metavar="DIR", default=None,
+                   help="directory with the catalog recordings (default recordings/, or "
+                        "recordings/NAME/ with --stack NAME)")
     add_search_arguments(p, "the searches, the validation variants and generated instances")
     p.add_argument("--compare-scope", type=int, default=3, metavar="N",
                    help="entries also analysed with --scope all (default 3)")
@@ -46,7 +50,10 @@ def run(args: argparse.Namespace, env: Env) -> int:
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
-    kwargs: dict[str, Any] = {"recordings": Path(args.recordings), "compare_scope": args.compare_scope,
+    recordings = Path(args.recordings) if args.recordings else (
+        Path("recordings") if args.stack == "ads" else Path("recordings") / args.stack)
+    kwargs: dict[str, Any] = {"recordings": recordings, "compare_scope": args.compare_scope,
+                              "stack": args.stack,
                               "instances": args.instances,
                               "progress": lambda msg: print(msg, file=env.stderr, flush=True)}
     try:
@@ -91,13 +98,16 @@ def render(res: dict, env: Env) -> None:
     from rocas.pipeline.report import change
 
     con = env.out()
-    t = Table(title=f"Table 4 for the built-in ADS: {res['hits']} of {res['total']} hit")
+    who = "the built-in ADS" if res.get("stack", "ads") == "ads" else f"stack {res['stack']}"
+    t = Table(title=f"Table 4 for {who}: {res['hits']} of {res['total']} hit")
     for c in ("id", "trigger found", "module (expected)", "misconfiguration found (expected)",
               "verdict", "confidence", "s"):
         t.add_column(c)
     for r in res["entries"]:
         e, f, m = r["expected"], r["found"], r["marks"]
         trig = f"{f['trigger_entity']}.{f['trigger_property']}" if f["trigger_entity"] else "—"
+        if m.get("trigger") is not None:
+            trig = f"{_mark(m['trigger'])} {trig} ({e['trigger_replayed']}.{e['trigger_property']})"
         found = ", ".join(change(c, "->") for c in f["changes"]) or "—"
         if f.get("robust"):
             found += ", robust " + ", ".join(_num(v) for v in f["robust"].values())

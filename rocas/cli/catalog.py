@@ -10,6 +10,9 @@
   type and family (rotated, mirrored, other speeds, actors, starts, or all mixed; see
   rocas.scenarios.variants), checked the same way, written as catalog-format files with their
   ground truth (and, with ``--record``, their accident recordings beside them).
+
+``--stack NAME`` works on another stack's catalog (``--stack lav``: L1-L6, recorded into
+``recordings/lav/``); ``--family`` is the built-in catalog's only.
 """
 
 from __future__ import annotations
@@ -28,14 +31,20 @@ HELP = "the accident catalog (A1-A12): list it, record its accidents, generate i
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
-    ls = sub.add_parser("list", help="show the entries and their ground truth")
+    stack = argparse.ArgumentParser(add_help=False)
+    stack.add_argument("--stack", default="ads", metavar="NAME",
+                       help="the stack whose catalog to use (default ads, the built-in ADS; "
+                            "lav: the LAV-like stack's)")
+    ls = sub.add_parser("list", help="show the entries and their ground truth", parents=[stack])
     ls.add_argument("--json", action="store_true", help="print the ground truth as JSON")
-    rec = sub.add_parser("record", help="write the accident recording of every entry")
+    rec = sub.add_parser("record", help="write the accident recording of every entry",
+                         parents=[stack])
     rec.add_argument("directory", metavar="DIR", help="output directory (e.g. recordings/)")
     rec.add_argument("--only", action="append", default=[], metavar="ID",
                      help="record only this entry (repeatable)")
     gen = sub.add_parser("generate", help="seeded variants of every type that still crash and "
-                                            "that a documented fix still repairs")
+                                            "that a documented fix still repairs",
+                         parents=[stack])
     gen.add_argument("--instances", type=int, required=True, metavar="K",
                      help="variants per type")
     gen.add_argument("-o", "--output", metavar="DIR", default=None,
@@ -53,10 +62,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     gen.add_argument("--json", action="store_true", help="print the counts as JSON")
 
 
-def _selected(only: list[str]):  # noqa: ANN202
+def _selected(only: list[str], stack: str = "ads"):  # noqa: ANN202
     from rocas.scenarios.catalog import entries, entry
 
-    return [entry(i) for i in only] if only else list(entries())
+    return [entry(i, stack) for i in only] if only else list(entries(stack))
 
 
 def _truth_json(e) -> dict:  # noqa: ANN001
@@ -75,11 +84,12 @@ def _truth_json(e) -> dict:  # noqa: ANN001
 def _list(args: argparse.Namespace, env: Env) -> int:
     from rich.table import Table
 
-    items = _selected([])
+    items = _selected([], args.stack)
     if args.json:
         print(json.dumps([_truth_json(e) for e in items], indent=2), file=env.stdout)
         return 0
-    table = Table(title="rocas accident catalog")
+    table = Table(title="rocas accident catalog" + ("" if args.stack == "ads" else
+                                                     f" of stack {args.stack}"))
     for col in ("id", "title", "module", "parameter(s)", "fix", "consequence"):
         table.add_column(col)
     for e in items:
@@ -99,15 +109,15 @@ def _list(args: argparse.Namespace, env: Env) -> int:
 
 
 def _record(args: argparse.Namespace, env: Env) -> int:
-    from rocas.ads.run import simulate
     from rocas.scenarios.catalog import accident_matches
+    from rocas.stacks.rollout import simulate
 
     out_dir = Path(args.directory)
     check_parent_exists(out_dir)
     out_dir.mkdir(exist_ok=True)
     failed = []
     written: list[str] = []
-    for e in _selected(args.only):
+    for e in _selected(args.only, args.stack):
         path = out_dir / f"{e.key}.mcap"
         try:
             res = simulate(e.scenario, output=path)
@@ -133,12 +143,15 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
     if args.record and not (args.family and args.output):
         raise UsageError("--record needs --family and -o DIR (where the recordings go)")
     if args.family:
+        if args.stack != "ads":
+            raise UsageError("--family generates variants of the built-in catalog only",
+                             "leave out --stack, or use --instances alone")
         return _generate_variants(args, env)
     out_dir = Path(args.output) if args.output else None
     rows = []
     written: list[str] = []
     try:
-        for e in _selected(args.only):
+        for e in _selected(args.only, args.stack):
             rep = generate_instances(e, args.instances, seed=args.seed)
             rows.append({"id": e.id, "key": e.key, "tried": rep.tried, "crashed": rep.crashed,
                          "fix_holds": rep.fix_holds, "kept": len(rep.instances)})

@@ -24,7 +24,8 @@ def _expected(truth: Any) -> dict[str, Any]:
     return {"verdict": "misconfiguration" if truth.fixable else "no_configuration_fix",
             "deviating_module": truth.module, "parameters": list(truth.parameters),
             "fixes": [dict(f) for f in truth.fixes],
-            "trigger_entity": truth.trigger_entity, "trigger_property": truth.trigger_property}
+            "trigger_entity": truth.trigger_entity, "trigger_property": truth.trigger_property,
+            "trigger_replayed": truth.replayed_id}
 
 
 def _found(report: dict[str, Any]) -> dict[str, Any]:
@@ -49,9 +50,12 @@ def _same_way(expected_fixes: list[dict[str, float]], changes: list[dict[str, An
     return False
 
 
-def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool]:
-    """Hit marks per column: verdict, module, parameter, and the overall hit (verdict and
-    module, and parameter when a fix exists).
+def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool | None]:
+    """Hit marks per column: verdict, module, parameter, trigger, and the overall hit (verdict
+    and module, parameter when a fix exists, and trigger when it can be scored).
+
+    The trigger is scored (entity and property) when the ground truth knows the id a replay
+    gives the trigger entity (``trigger_replayed``); otherwise its mark is None.
 
     The parameter counts when a found change moves a documented fix's parameter in the same
     direction as that fix: a "fix" that lowers an overtake margin so the ego races ahead of the
@@ -60,8 +64,12 @@ def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool]:
     module = expected["deviating_module"] == found["deviating_module"]
     param = _same_way(expected["fixes"], found["changes"]) \
         if expected["verdict"] == "misconfiguration" else not found["parameters"]
-    return {"verdict": verdict, "module": module, "parameter": param,
-            "hit": verdict and module and param}
+    trigger = None
+    if expected.get("trigger_replayed"):
+        trigger = (found["trigger_entity"] == expected["trigger_replayed"]
+                   and found["trigger_property"] == expected["trigger_property"])
+    return {"verdict": verdict, "module": module, "parameter": param, "trigger": trigger,
+            "hit": verdict and module and param and trigger is not False}
 
 
 #: the cyber searches ``--compare-scope`` sets side by side: (scope, screening)
@@ -119,11 +127,13 @@ def run_bench(
     compare_scope: int = 3,
     instances: int = 0,
     progress: Callable[[str], None] = lambda _: None,
+    stack: str = "ads",
 ) -> dict[str, Any]:
-    """Analyze catalog entries and score them; returns the ``--json`` object."""
+    """Analyze catalog entries of ``stack``'s catalog and score them; returns the ``--json``
+    object."""
     from rocas.scenarios.catalog import entries, entry, generate_instances
 
-    chosen = [entry(i) for i in ids] if ids else list(entries())
+    chosen = [entry(i, stack) for i in ids] if ids else list(entries(stack))
     if not chosen:
         raise UsageError("the catalog is empty")
     out.mkdir(parents=True, exist_ok=True)
@@ -192,6 +202,7 @@ def run_bench(
                              "accuracy": hits / len(inst.instances) if inst.instances else None})
 
     return {
+        "stack": stack,
         "entries": rows,
         "hits": sum(r["hit"] for r in rows),
         "total": len(rows),
@@ -229,7 +240,7 @@ def run_bench_seeds(
                                     "parameters": r["found"]["parameters"],
                                     "trigger": r["found"]["trigger_entity"]}
     seconds = sorted(r["seconds"] for res in runs for r in res["entries"])
-    return {"seeds": list(seeds), "runs": runs,
+    return {"stack": kwargs.get("stack", "ads"), "seeds": list(seeds), "runs": runs,
             "hits_per_seed": {str(s): res["hits"] for s, res in zip(seeds, runs, strict=True)},
             "total": runs[0]["total"],
             "entries": list(per_entry.values()),

@@ -74,3 +74,19 @@ def test_generate_family_and_record_misuse_are_usage_errors(rocas, tmp_path):
     assert r.code != 0 and "--record needs --family" in r.stderr
     r = rocas("catalog", "generate", "--instances", "1", "--family", "teleport")
     assert r.code != 0 and "teleport" in r.stderr
+
+
+def test_catalog_list_and_record_take_a_stack(tmp_path, capsys):
+    import json as _json
+
+    from rocas.cli.main import main
+
+    assert main(["catalog", "list", "--stack", "lav", "--json"]) == 0
+    listed = _json.loads(capsys.readouterr().out)
+    assert [e["id"] for e in listed][:2] == ["L1", "L2"] and listed[0]["module"] == "brake"
+    assert main(["catalog", "record", str(tmp_path), "--stack", "lav", "--only", "L1"]) == 0
+    assert (tmp_path / "l01_red_truck_roundabout.mcap").is_file()
+    assert main(["catalog", "generate", "--stack", "lav", "--family", "rotate",
+                 "--instances", "1"]) == 2
+    assert "built-in catalog only" in capsys.readouterr().err
+    assert main(["catalog", "list", "--stack", "nope"]) == 2

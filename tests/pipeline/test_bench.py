@@ -103,3 +103,22 @@ def test_the_agreement_summary_counts_levels_adoptions_and_the_second_opinion():
     assert bench.agreement_summary(rows) == {
         "analyses": 3, "stable": 1, "contested": 1, "unstable": 1, "adopted": 1, "unanimous": 1,
         "second_opinion_agrees": 2}
+
+
+def test_the_trigger_is_scored_when_the_replayed_id_is_known():
+    from rocas.pipeline.bench import score
+
+    exp = {"verdict": "misconfiguration", "deviating_module": "brake",
+           "parameters": ["brake.brake_threshold"], "fixes": [{"brake.brake_threshold": 0.8}],
+           "trigger_entity": "red_truck", "trigger_property": "color",
+           "trigger_replayed": "obstacle_1"}
+    found = {"verdict": "misconfiguration", "deviating_module": "brake",
+             "parameters": ["brake.brake_threshold"],
+             "changes": [{"parameter": "brake.brake_threshold", "original": 0.1, "mutated": 0.5}],
+             "trigger_entity": "obstacle_1", "trigger_property": "color"}
+    assert score(exp, found) == {"verdict": True, "module": True, "parameter": True,
+                                 "trigger": True, "hit": True}
+    other = score(exp, {**found, "trigger_property": "speed"})
+    assert other["trigger"] is False and not other["hit"]
+    unknown = score({**exp, "trigger_replayed": None}, {**found, "trigger_entity": "obstacle_2"})
+    assert unknown["trigger"] is None and unknown["hit"]

@@ -14,6 +14,11 @@ e.truth.fix           # {"perception.brake_threshold": 0.99}
 e.reference_scenario  # the triggering property mutated: no accident
 ```
 
+Another registered stack has its own catalog in the subpackage of its name (``lav/l01_*.toml``
+... for the LAV-like stack): ``entries(stack="lav")``, ``entry("L1", stack="lav")``. Its ground
+truth names that stack's modules and parameters, and its scenarios name the stack (``[ego]
+stack``).
+
 Instances (:func:`generate_instances`) are seeded variants of an entry (positions, speeds,
 timing and weather jittered) that still crash, and that a documented fix still repairs: the
 ground truth holds for them as it does for the entry.
@@ -49,7 +54,7 @@ _ENTITY_KEYS = {"actor": "actors", "object": "objects", "area": "areas",
 _TRUTH_KEYS = {"id", "title", "paper", "consequence", "collision_with", "situation", "module",
                "trigger_entity", "trigger_property", "reference", "parameters", "fix",
                "alternatives", "fix_note", "fixable", "no_fix_reason", "override", "diff_module",
-               "diff_change_s", "diff_note", "jitter"}
+               "diff_change_s", "diff_note", "jitter", "replayed_id"}
 
 
 @dataclass(frozen=True)
@@ -78,6 +83,10 @@ class GroundTruth:
         diff_module: the first deviating module ``rocas diff`` names between the accident
             recording and the physically mutated reference; diff_change_s: its change time [s].
         jitter: instance generation ranges (see :func:`generate_instances`).
+        replayed_id: the id a replay of the entry's recording gives the trigger entity, when
+            the stack's channels determine it (lav's pnp numbers its agents in the world's
+            actor order, so its first actor replays as ``obstacle_1``); None when they do not
+            (the built-in ADS's tracker numbers tracks as they appear).
     """
 
     id: str
@@ -101,6 +110,7 @@ class GroundTruth:
     diff_change_s: float | None
     diff_note: str
     jitter: Mapping[str, Any]
+    replayed_id: str | None = None
 
     @property
     def fixes(self) -> tuple[Mapping[str, float], ...]:
@@ -132,7 +142,19 @@ def _fail(source: str, key: str, reason: str) -> ScenarioError:
     return ScenarioError(f"{source}: ground_truth.{key}: {reason}")
 
 
-def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
+def _inventory(stack: str) -> tuple[tuple[str, ...], set[str]]:
+    """The modules a ground truth may name and the parameters it may set, per stack."""
+    if stack == "ads":
+        from rocas.ads.params import PARAMETERS
+
+        return MODULES, set(PARAMETERS)
+    from rocas.stacks.registry import get_stack
+
+    st = get_stack(stack)
+    return tuple(st.modules), {p.full_name for p in st.parameters}
+
+
+def _truth(data: Mapping[str, Any], source: str, stack: str = "ads") -> GroundTruth:
     unknown = set(data) - _TRUTH_KEYS
     if unknown:
         raise _fail(source, sorted(unknown)[0], "unknown key")
@@ -142,13 +164,13 @@ def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
             raise _fail(source, key, "missing")
     if data["consequence"] not in CONSEQUENCES:
         raise _fail(source, "consequence", f"expected one of {CONSEQUENCES}")
-    if data["module"] not in MODULES:
-        raise _fail(source, "module", f"expected one of {MODULES}")
-    from rocas.ads.params import PARAMETERS
-
+    modules, names = _inventory(stack)
+    if data["module"] not in modules:
+        raise _fail(source, "module", f"expected one of {modules}")
+    what = "ADS parameter" if stack == "ads" else f"parameter of stack {stack!r}"
     for name in list(data["parameters"]) + list(data.get("fix", {})):
-        if name not in PARAMETERS:
-            raise _fail(source, "parameters", f"unknown ADS parameter {name!r}")
+        if name not in names:
+            raise _fail(source, "parameters", f"unknown {what} {name!r}")
         if not name.startswith(data["module"] + "."):
             raise _fail(source, "parameters", f"{name} is not a {data['module']} parameter")
     fixable = bool(data.get("fixable", True))
@@ -176,6 +198,7 @@ def _truth(data: Mapping[str, Any], source: str) -> GroundTruth:
         no_fix_reason=data.get("no_fix_reason", ""), override=data.get("override", ""),
         diff_module=data["diff_module"], diff_change_s=data.get("diff_change_s"),
         diff_note=data.get("diff_note", ""), jitter=dict(data.get("jitter", {})),
+        replayed_id=data.get("replayed_id"),
     )
 
 
@@ -212,22 +235,45 @@ def mutate(document: Mapping[str, Any], change: Mapping[str, Any], source: str,
     return scenario_from_dict(doc, source=source)
 
 
-def _root():  # noqa: ANN202
-    return resources.files("rocas.scenarios") / "catalog"
+def _root(stack: str = "ads"):  # noqa: ANN202
+    root = resources.files("rocas.scenarios") / "catalog"
+    return root if stack == "ads" else root / stack
+
+
+def _is_entry_file(name: str) -> bool:
+    """``a01_x.toml``, ``l01_x.toml``: a letter, two digits, an underscore."""
+    return name.endswith(".toml") and len(name) > 4 and name[0].isalpha() and \
+        name[1:3].isdigit() and name[3] == "_"
 
 
 @cache
-def _load_all() -> tuple[CatalogEntry, ...]:
+def _load_all(stack: str = "ads") -> tuple[CatalogEntry, ...]:
+    root = _root(stack)
+    if not root.is_dir():
+        raise UsageError(f"stack {stack!r} has no accident catalog",
+                         "catalogs exist for: " + ", ".join(stacks_with_catalog()))
+    prefix = "catalog/" if stack == "ads" else f"catalog/{stack}/"
     out = []
-    for f in sorted(_root().iterdir(), key=lambda p: p.name):
-        if not (f.name.startswith("a") and f.name.endswith(".toml")):
+    for f in sorted(root.iterdir(), key=lambda p: p.name):
+        if not _is_entry_file(f.name):
             continue
-        out.append(entry_from_document(tomllib.loads(f.read_text(encoding="utf-8")),
-                                       key=f.name[:-5], source=f"catalog/{f.name}"))
+        e = entry_from_document(tomllib.loads(f.read_text(encoding="utf-8")),
+                                key=f.name[:-5], source=prefix + f.name, stack=stack)
+        if e.scenario.ego.stack != stack:
+            raise ScenarioError(f"{prefix}{f.name}: ego.stack: expected {stack!r} (the "
+                                f"catalog's stack), got {e.scenario.ego.stack!r}")
+        out.append(e)
     return tuple(out)
 
 
-def entry_from_document(data: Mapping[str, Any], key: str, source: str) -> CatalogEntry:
+def stacks_with_catalog() -> tuple[str, ...]:
+    """The stacks that have an accident catalog (``ads`` first)."""
+    return ("ads", *sorted(d.name for d in _root().iterdir()
+                           if d.is_dir() and not d.name.startswith("_")))
+
+
+def entry_from_document(data: Mapping[str, Any], key: str, source: str,
+                        stack: str = "ads") -> CatalogEntry:
     """A catalog entry from a parsed catalog-format document (a scenario plus its
     ``[ground_truth]`` table): the shipped entries and generated variants' files alike."""
     data = dict(data)
@@ -235,24 +281,26 @@ def entry_from_document(data: Mapping[str, Any], key: str, source: str) -> Catal
     if not isinstance(truth_doc, Mapping):
         raise ScenarioError(f"{source}: no [ground_truth] table")
     scenario = scenario_from_dict(data, source=source)
-    return CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source),
+    return CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source, stack),
                         document=data)
 
 
-def entries() -> tuple[CatalogEntry, ...]:
-    """All catalog entries, in type order (A1 first)."""
-    return tuple(sorted(_load_all(), key=lambda e: int(e.id[1:])))
+def entries(stack: str = "ads") -> tuple[CatalogEntry, ...]:
+    """All catalog entries of ``stack``'s catalog, in type order (A1 or L1 first)."""
+    return tuple(sorted(_load_all(stack), key=lambda e: int(e.id[1:])))
 
 
-def entry(type_id: str) -> CatalogEntry:
+def entry(type_id: str, stack: str = "ads") -> CatalogEntry:
     """One entry by type id ("A9", "a9", "a09") or file stem."""
     want = type_id.lower()
-    for e in entries():
+    for e in entries(stack):
         if want in (e.id.lower(), e.key, e.key.split("_", 1)[0]) or (
-                want[:1] == "a" and want[1:].isdigit() and int(want[1:]) == int(e.id[1:])):
+                want[:1] == e.id[:1].lower() and want[1:].isdigit()
+                and int(want[1:]) == int(e.id[1:])):
             return e
-    raise UsageError(f"no catalog entry {type_id!r}",
-                     f"available: {', '.join(e.id for e in entries())}")
+    raise UsageError(f"no catalog entry {type_id!r}" + ("" if stack == "ads" else
+                                                        f" for stack {stack!r}"),
+                     f"available: {', '.join(e.id for e in entries(stack))}")
 
 
 def accident_matches(truth: GroundTruth, outcome: Any) -> bool:
@@ -346,7 +394,7 @@ def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
     kept when it passes. Stops at ``count`` kept or ``max_tries`` (default ``8 * count``)
     tried.
     """
-    from rocas.ads.run import simulate_batch
+    from rocas.stacks.rollout import simulate_batch
 
     if count < 1:
         raise UsageError("the number of instances must be >= 1")
@@ -359,14 +407,15 @@ def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
         n = min(batch, max_tries - tried)
         variants = [(k + i, _jittered(e, np.random.default_rng([seed, k + i]))) for i in range(n)]
         k += n
-        res = simulate_batch([v for _, v in variants])
+        res = simulate_batch([v for _, v in variants], [{}] * n, [v.seed for _, v in variants])
         tried += n
         crash = [i for i, out in enumerate(res.outcomes) if accident_matches(e.truth, out)]
         crashed += len(crash)
         good = crash
         if fixes and crash:
             pairs = [(i, f) for i in crash for f in fixes]
-            fixed = simulate_batch([variants[i][1] for i, _ in pairs], params=[f for _, f in pairs])
+            fixed = simulate_batch([variants[i][1] for i, _ in pairs], [f for _, f in pairs],
+                                   [variants[i][1].seed for i, _ in pairs])
             ok = {i for j, (i, _) in enumerate(pairs)
                   if fix_holds(res.outcomes[i], res.ego[i], fixed.outcomes[j], fixed.ego[j], res.times)}
             good = [i for i in crash if i in ok]
@@ -392,7 +441,7 @@ __all__ = ["PRE_ACCIDENT_MARGIN_S", "PRE_ACCIDENT_RMSE_M", "CatalogEntry", "Grou
            "InstanceReport", "accident_matches", "accident_time", "entries", "entry",
            "entry_from_document", "fix_holds",
            "generate_instances", "mutate",
-           "scenario_toml", "trajectory_rmse"]
+           "scenario_toml", "stacks_with_catalog", "trajectory_rmse"]
 
 
 

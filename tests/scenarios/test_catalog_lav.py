@@ -1,0 +1,139 @@
+"""The LAV-like stack's accident catalog (``entries(stack="lav")``): every entry crashes with
+lav's shipped configuration as documented, the reference and the documented fix avoid it, the
+red truck's brake probability clears the threshold with margin while a white truck's stays
+well below, and the shipped recordings under recordings/lav/ match the catalog."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rocas.errors import ScenarioError, UsageError
+from rocas.recording.reader import open_recording
+from rocas.scenarios.catalog import (
+    accident_matches,
+    entries,
+    entry,
+    entry_from_document,
+    fix_holds,
+    stacks_with_catalog,
+)
+from rocas.stacks.registry import get_stack
+from rocas.stacks.rollout import simulate, simulate_batch
+
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "lav"
+ENTRIES = entries("lav")
+IDS = [e.id for e in ENTRIES]
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Per entry: the accident, the reference, then each documented fix."""
+    out = {}
+    for e in ENTRIES:
+        scs = [e.scenario, e.reference_scenario] + [e.scenario] * len(e.truth.fixes)
+        params = [{}, {}] + [dict(f) for f in e.truth.fixes]
+        out[e.id] = simulate_batch(scs, params, [s.seed for s in scs])
+    return out
+
+
+def test_the_lav_catalog_is_its_own():
+    assert "lav" in stacks_with_catalog() and stacks_with_catalog()[0] == "ads"
+    assert IDS == sorted(IDS, key=lambda i: int(i[1:])) and len(IDS) >= 2
+    lav = get_stack("lav")
+    names = {p.full_name for p in lav.parameters}
+    for e in ENTRIES:
+        assert e.scenario.ego.stack == "lav"
+        assert e.truth.module in lav.modules
+        assert set(e.truth.parameters) <= names and set(e.truth.fix) <= names
+        assert e.truth.replayed_id == "obstacle_1"
+    assert entry("l1", "lav").id == entry("L01", "lav").id == "L1"
+    with pytest.raises(UsageError, match="no catalog entry 'L1'"):
+        entry("L1")  # the built-in catalog has no L1
+    with pytest.raises(UsageError, match="has no accident catalog"):
+        entries("nope")
+
+
+def test_lav_ground_truth_names_lav_modules_not_the_ads():
+    e = entry("L1", "lav")
+    doc = {**e.document, "ground_truth": {**_truth_doc(e), "module": "perception"}}
+    with pytest.raises(ScenarioError, match="ground_truth.module"):
+        entry_from_document(doc, key="x", source="x.toml", stack="lav")
+    doc["ground_truth"] = {**_truth_doc(e), "parameters": ["perception.brake_threshold"]}
+    with pytest.raises(ScenarioError, match="unknown parameter of stack 'lav'"):
+        entry_from_document(doc, key="x", source="x.toml", stack="lav")
+
+
+def _truth_doc(e) -> dict:  # noqa: ANN001
+    t = e.truth
+    return {"id": t.id, "title": t.title, "consequence": t.consequence, "module": t.module,
+            "trigger_entity": t.trigger_entity, "trigger_property": t.trigger_property,
+            "reference": dict(t.reference), "parameters": list(t.parameters),
+            "fix": dict(t.fix), "diff_module": t.diff_module}
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_crashes_with_the_shipped_configuration(runs, type_id):
+    o = runs[type_id].outcomes[0]
+    assert accident_matches(entry(type_id, "lav").truth, o), o.summary()
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_the_reference_avoids_the_accident(runs, type_id):
+    o = runs[type_id].outcomes[1]
+    assert not o.collided and not o.emergency, o.summary()
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_the_documented_fix_avoids_the_accident_and_keeps_the_trajectory(runs, type_id):
+    r = runs[type_id]
+    for k in range(len(entry(type_id, "lav").truth.fixes)):
+        assert fix_holds(r.outcomes[0], r.ego[0], r.outcomes[2 + k], r.ego[2 + k], r.times), \
+            r.outcomes[2 + k].summary()
+
+
+def _brake_peak(path: Path) -> float:
+    rec = open_recording(path)
+    return max(m.message.probability for m in rec.decoded({"/lav/brake/prediction"}))
+
+
+def test_the_red_truck_clears_the_brake_threshold_with_margin_and_a_white_one_does_not(tmp_path):
+    """L1's mechanism: with the brake threshold out of the way (the fix), the red truck's
+    brake probability peaks near 0.5, five times the shipped threshold (0.1); the same truck
+    in white peaks near 0.05, half of it."""
+    e = entry("L1", "lav")
+    red = simulate(e.scenario, dict(e.truth.fix), output=tmp_path / "red.mcap")
+    white = simulate(e.reference_scenario, dict(e.truth.fix), output=tmp_path / "white.mcap")
+    assert not red.outcome.emergency and not white.outcome.emergency
+    assert _brake_peak(tmp_path / "red.mcap") > 0.4
+    assert _brake_peak(tmp_path / "white.mcap") < 0.07
+
+
+@pytest.mark.parametrize("type_id", IDS)
+def test_the_shipped_recording_is_in_sync(type_id):
+    e = entry(type_id, "lav")
+    path = RECORDINGS / f"{e.key}.mcap"
+    assert path.is_file(), f"missing {path}; run: rocas catalog record recordings/lav --stack lav"
+    assert path.stat().st_size < 1_000_000
+    meta = dict(open_recording(path).scan().metadata)
+    assert meta["rocas.stack"]["name"] == "lav"
+    assert meta["rocas.ego"]["scenario"] == e.scenario.name
+    assert meta["rocas.run"]["emergency"] == "true" or e.truth.consequence == "collision"
+    assert meta["rocas.run"]["collided"] == ("true" if e.truth.consequence == "collision"
+                                             else "false")
+
+
+@pytest.mark.slow
+def test_analyze_names_l1s_trigger_module_and_parameter(tmp_path):
+    from rocas.pipeline.analyze import analyze
+    from rocas.pipeline.bench import _expected, _found, score
+    from rocas.pipeline.config import AnalyzeConfig
+
+    e = entry("L1", "lav")
+    rep = analyze(RECORDINGS / f"{e.key}.mcap", tmp_path / "run",
+                  AnalyzeConfig(seed=0, validation_variants=8, alternate_references=0,
+                                second_opinion=False))
+    marks = score(_expected(e.truth), _found(rep))
+    assert marks == {"verdict": True, "module": True, "parameter": True, "trigger": True,
+                     "hit": True}, _found(rep)
