@@ -27,14 +27,13 @@ Any other key is refused (it is most likely a typo).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-import networkx as nx
+from typing import TYPE_CHECKING, Any
 
 from rocas.errors import InputError, TopologyError
 from rocas.recording.annotate import ChannelAnnotation
@@ -47,6 +46,9 @@ from rocas.recording.topology import (
     WRITERS_KEY,
     split_modules,
 )
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 CHANNEL, MODULE = "channel", "module"
 Node = tuple[str, str]  # (kind, name)
@@ -246,47 +248,77 @@ class ChannelModuleGraph:
 
     Attributes:
         topology: topic -> ChannelTopology.
-        graph: networkx DiGraph over nodes ``("channel", topic)`` and ``("module", name)``.
+        successors: node -> the nodes its edges lead to, over nodes ``("channel", topic)``
+            and ``("module", name)``; nodes and each node's successors in the order they
+            were added (the order a networkx DiGraph built the same way keeps).
     """
 
     topology: dict[str, ChannelTopology]
-    graph: nx.DiGraph = field(compare=False)
+    successors: dict[Node, dict[Node, None]] = field(compare=False, repr=False)
 
     @classmethod
     def from_topology(cls, topology: Mapping[str, ChannelTopology]) -> ChannelModuleGraph:
-        g = nx.DiGraph()
+        succ: dict[Node, dict[Node, None]] = {}
+
+        def add_edge(u: Node, v: Node) -> None:
+            succ.setdefault(u, {})
+            succ.setdefault(v, {})
+            succ[u][v] = None
+
         for topic, t in topology.items():
-            g.add_node((CHANNEL, topic))
+            succ.setdefault((CHANNEL, topic), {})
             for m in t.writers:
-                g.add_edge((MODULE, m), (CHANNEL, topic))
+                add_edge((MODULE, m), (CHANNEL, topic))
             for m in t.readers:
-                g.add_edge((CHANNEL, topic), (MODULE, m))
-        return cls(dict(topology), g)
+                add_edge((CHANNEL, topic), (MODULE, m))
+        return cls(dict(topology), succ)
+
+    @functools.cached_property
+    def graph(self) -> nx.DiGraph:
+        """The CMG as a networkx DiGraph (imported on first use: the diff itself needs none)."""
+        import networkx as nx
+
+        g = nx.DiGraph()
+        g.add_nodes_from(self.successors)
+        g.add_edges_from((u, v) for u, vs in self.successors.items() for v in vs)
+        return g
+
+    @property
+    def nodes(self) -> list[Node]:
+        return list(self.successors)
+
+    @property
+    def edges(self) -> list[tuple[Node, Node]]:
+        return [(u, v) for u, vs in self.successors.items() for v in vs]
 
     @property
     def modules(self) -> list[str]:
-        return sorted(n for k, n in self.graph.nodes if k == MODULE)
+        return sorted(n for k, n in self.successors if k == MODULE)
 
     @property
     def channels(self) -> list[str]:
         return sorted(self.topology)
 
     def has_edges(self) -> bool:
-        return self.graph.number_of_edges() > 0
+        return any(self.successors.values())
 
     def writers_of(self, topic: str) -> tuple[str, ...]:
         t = self.topology.get(topic)
         return t.writers if t else ()
 
     def channels_written_by(self, module: str) -> list[str]:
-        return sorted(n for _, (k, n) in self.graph.out_edges((MODULE, module)) if k == CHANNEL)
+        return sorted(n for k, n in self.successors.get((MODULE, module), {}) if k == CHANNEL)
+
+    def channels_read_by(self, module: str) -> list[str]:
+        node = (MODULE, module)
+        return sorted(n for (k, n), vs in self.successors.items() if k == CHANNEL and node in vs)
 
     def to_json(self) -> dict[str, Any]:
         """The graph in the ``--cmg`` file format, plus per-channel sources."""
         modules: dict[str, dict[str, list[str]]] = {}
         for m in self.modules:
             modules[m] = {
-                "reads": sorted(n for (k, n), _ in self.graph.in_edges((MODULE, m))),
+                "reads": self.channels_read_by(m),
                 "writes": self.channels_written_by(m),
             }
         control = [t for t, c in self.topology.items() if c.is_control]
@@ -313,14 +345,14 @@ class ChannelModuleGraph:
         escaped, so any topic or module name gives valid DOT and is shown as it is.
         """
         lines = ["digraph cmg {", "  rankdir=LR;"]
-        for kind, name in sorted(self.graph.nodes):
+        for kind, name in sorted(self.successors):
             shape = "box" if kind == CHANNEL else "ellipse"
             extra = ", style=bold" if kind == CHANNEL and self.topology[name].is_control else ""
             lines.append(
                 f"  {_dot_quote(f'{kind}:{name}')} [label={_dot_quote(name)}, "
                 f"shape={shape}{extra}];"
             )
-        for (k1, n1), (k2, n2) in sorted(self.graph.edges):
+        for (k1, n1), (k2, n2) in sorted(self.edges):
             lines.append(f"  {_dot_quote(f'{k1}:{n1}')} -> {_dot_quote(f'{k2}:{n2}')};")
         lines.append("}")
         return "\n".join(lines) + "\n"

@@ -15,8 +15,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import networkx as nx
-
 from rocas.analysis.cmg import CHANNEL, MODULE, ChannelModuleGraph, Node
 
 
@@ -100,21 +98,20 @@ def find_initial_module(
         control_channel: the channel to start from.
         delta_s: reaction window delta [s].
     """
-    g = cmg.graph
+    succ = cmg.successors
     t_star: dict[Node, float | None] = {}
-    for node in g.nodes:
+    for node in succ:
         kind, name = node
         if kind == CHANNEL:
             t_star[node] = channel_t_star.get(name)
-    for node in g.nodes:
+    for node, outs in succ.items():
         kind, name = node
         if kind == MODULE:
-            ts = [t_star[v] for _, v in g.out_edges(node) if t_star.get(v) is not None]
+            ts = [t_star[v] for v in outs if t_star.get(v) is not None]
             t_star[node] = min(ts) if ts else None  # type: ignore[type-var]
 
-    pruned = g.copy()
     removed: list[RemovedEdge] = []
-    for u, v in sorted(g.edges):
+    for u, v in sorted(cmg.edges):
         tu, tv = t_star[u], t_star[v]
         if tu is None or tv is None:
             which = u if tu is None else v
@@ -123,14 +120,20 @@ def find_initial_module(
             continue
         else:
             reason = f"t*({u[1]}) = {tu:g} s is outside [{tv - delta_s:g}, {tv:g}] s"
-        pruned.remove_edge(u, v)
         removed.append(RemovedEdge(u, v, reason))
 
+    # the reversed pruned graph: upstream[v] lists the kept edges' sources in node order,
+    # downstream[u] their targets in edge order
+    gone = {(e.source, e.target) for e in removed}
+    upstream: dict[Node, list[Node]] = {n: [] for n in succ}
+    downstream: dict[Node, list[Node]] = {}
+    for u, outs in succ.items():
+        downstream[u] = [v for v in outs if (u, v) not in gone]
+        for v in downstream[u]:
+            upstream[v].append(u)
     start: Node = (CHANNEL, control_channel)
-    reversed_g = pruned.reverse(copy=False)
-    reach_nodes = nx.descendants(reversed_g, start) if start in reversed_g else set()
-    reachable = frozenset(n for k, n in reach_nodes if k == MODULE)
-    depth = nx.single_source_shortest_path_length(reversed_g, start) if start in reversed_g else {}
+    depth = _depths(upstream, start) if start in succ else {}
+    reachable = frozenset(n for k, n in depth if k == MODULE)
     candidates = [
         (t_star[(MODULE, m)], -depth.get((MODULE, m), 0), m)
         for m in reachable
@@ -140,7 +143,7 @@ def find_initial_module(
 
     path: tuple[str, ...] = ()
     if deviating is not None:
-        nodes = nx.shortest_path(reversed_g, start, (MODULE, deviating))
+        nodes = _shortest_path(upstream, downstream, start, (MODULE, deviating))
         path = tuple(n for _, n in nodes)
 
     exclusions: dict[str, str] = {}
@@ -170,3 +173,67 @@ def find_initial_module(
         path=path,
         exclusions=exclusions,
     )
+
+
+def _depths(forward: Mapping[Node, list[Node]], start: Node) -> dict[Node, int]:
+    """Breadth-first distance (edges) from ``start`` to every node it reaches, itself included."""
+    depth = {start: 0}
+    level = [start]
+    while level:
+        nxt = []
+        for v in level:
+            for w in forward[v]:
+                if w not in depth:
+                    depth[w] = depth[v] + 1
+                    nxt.append(w)
+        level = nxt
+    return depth
+
+
+def _shortest_path(forward: Mapping[Node, list[Node]], backward: Mapping[Node, list[Node]],
+                   source: Node, target: Node) -> list[Node]:
+    """A shortest path from ``source`` to ``target`` (which it reaches) along ``forward``.
+
+    Where several are shortest, the one networkx's ``shortest_path`` returns on the same
+    graph: a breadth-first search from both ends, a level at a time, that grows the smaller
+    frontier (the forward one on a tie) and stops at the first node both have seen, each
+    node remembering the neighbour it was first reached from (tests/analysis/test_pinpoint.py
+    checks the two agree).
+    """
+    if source == target:
+        return [source]
+    pred: dict[Node, Node | None] = {source: None}
+    succ: dict[Node, Node | None] = {target: None}
+    ahead, behind = [source], [target]
+    meet: Node | None = None
+    while meet is None and ahead and behind:
+        grow_forward = len(ahead) <= len(behind)
+        level, seen, other, edges = ((ahead, pred, succ, forward) if grow_forward
+                                     else (behind, succ, pred, backward))
+        frontier: list[Node] = []
+        for v in level:
+            for w in edges[v]:
+                if w not in seen:
+                    seen[w] = v
+                    frontier.append(w)
+                if w in other:
+                    meet = w
+                    break
+            if meet is not None:
+                break
+        if grow_forward:
+            ahead = frontier
+        else:
+            behind = frontier
+    assert meet is not None, "the target is reachable"
+    path: list[Node] = []
+    node: Node | None = meet
+    while node is not None:
+        path.append(node)
+        node = pred[node]
+    path.reverse()
+    node = succ[meet]
+    while node is not None:
+        path.append(node)
+        node = succ[node]
+    return path

@@ -45,7 +45,7 @@ from google.protobuf.message import DecodeError
 
 from rocas.analysis.mdr import EXACT, Tolerance, mdr
 from rocas.errors import RecordingError
-from rocas.recording.reader import ChannelInfo, DecodedMessage, Recording
+from rocas.recording.reader import ChannelInfo, Recording
 
 ACCIDENT, REFERENCE = 0, 1
 #: Longest stretch of log time one recording may span [s]. A longer one is a clock that
@@ -73,11 +73,48 @@ class ChannelSeries:
     only_in: str | None = None
 
 
-def _score(a: DecodedMessage, b: DecodedMessage, tol: Tolerance) -> float:
-    """MDR of two messages of one channel; equal payloads (one schema) are equal trees."""
-    if a.payload and a.payload == b.payload:
+#: A message in a bin: (log time [ns], arrival, channel, payload, decoder, message). A message
+#: read without decoding it carries its decoder and :data:`_UNDECODED`; a decoded one carries
+#: ``None`` and its message.
+_Entry = tuple[int, int, ChannelInfo, bytes, Callable[[bytes], Any] | None, Any]
+_UNDECODED = object()
+
+
+class _Undecodable(Exception):
+    """A payload read without decoding it does not decode: the pass must be read decoded."""
+
+
+def _message(e: _Entry) -> Any:
+    """The decoded message of an entry (decoding it now if it was read undecoded)."""
+    decode = e[4]
+    if decode is None:
+        return e[5]
+    try:
+        return decode(e[3])
+    except Exception as exc:  # a foreign file can hold anything
+        raise _Undecodable from exc
+
+
+def _decoded(e: _Entry) -> _Entry:
+    return e if e[4] is None else (e[0], e[1], e[2], e[3], None, _message(e))
+
+
+def _score(a: _Entry, b: _Entry, tol: Tolerance) -> float:
+    """MDR of two messages of one channel; equal payloads (one schema) are equal trees.
+
+    Equal payloads are not compared; read undecoded, one of them is decoded (both when their
+    decoders differ) only to learn that it decodes, as a decoded pass would have.
+    """
+    pa = a[3]
+    if pa and pa == b[3]:
+        if a[4] is not None:
+            _message(a)
+            if b[4] is not None and b[4] is not a[4]:
+                _message(b)
+        elif b[4] is not None:
+            _message(b)
         return 0.0
-    return mdr(a.message, b.message, tol)
+    return mdr(_message(a), _message(b), tol)
 
 
 @dataclass
@@ -87,7 +124,7 @@ class _Pending:
     index: int
     scores: list[float]
     leftover_side: int
-    leftover: list[Any]
+    leftover: list[_Entry]
     counts: tuple[int, int]
 
 
@@ -110,14 +147,15 @@ class _Acc:
         self.pending = None
 
     def add_bin(
-        self, index: int, a_msgs: list[DecodedMessage], b_msgs: list[DecodedMessage],
-        tol: Tolerance, adjacent: bool
+        self, index: int, a_msgs: list[_Entry], b_msgs: list[_Entry], tol: Tolerance,
+        adjacent: bool
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
         paired = min(len(a_msgs), len(b_msgs))
         scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
         side = ACCIDENT if len(a_msgs) > paired else REFERENCE
-        leftover = (a_msgs if side == ACCIDENT else b_msgs)[paired:]
+        # decoded now: an unpaired message counts only if it decodes, and may pair next bin
+        leftover = [_decoded(e) for e in (a_msgs if side == ACCIDENT else b_msgs)[paired:]]
         counts = (len(a_msgs), len(b_msgs))
         p = self.pending
         if (
@@ -205,23 +243,43 @@ def compute_series(
         raise ValueError("reorder_window_s must be a positive number of seconds")
     window_s = reorder_window_s
     trust_summary = [True, True]
+    lazy = True
     while True:
         try:
             return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
-                             trust_summary, progress)
-        except _Realign as bad:
-            # the summary's start is later than a message: it does not describe these
-            # messages, so the stream aligns itself (the pass then warns)
-            trust_summary[bad.side] = False
-        except _TooLate as late:
-            # each pass at least doubles the window: once it spans the files' log times
-            # nothing can be late, so the loop ends (a span is at most MAX_SPAN_S)
-            window_s = max(2.0 * window_s, late.window_s)
+                             trust_summary, lazy, progress)
+        except (_Undecodable, _Realign, _TooLate, RecordingError) as exc:
+            if lazy:
+                # a pass that decodes only differing payloads holds undecodable messages
+                # as well; where one of them may have mattered (it did not decode, or the
+                # pass stopped early), the pass is read decoded, which leaves them out
+                lazy = False
+            elif isinstance(exc, _Realign):
+                # the summary's start is later than a message: it does not describe these
+                # messages, so the stream aligns itself (the pass then warns)
+                trust_summary[exc.side] = False
+            elif isinstance(exc, _TooLate):
+                # each pass at least doubles the window: once it spans the files' log times
+                # nothing can be late, so the loop ends (a span is at most MAX_SPAN_S)
+                window_s = max(2.0 * window_s, exc.window_s)
+            else:
+                raise
+
+
+#: A message as a pass streams it: (channel, log time [ns], payload, decoder, message), as in
+#: :data:`_Entry`.
+_Streamed = tuple[ChannelInfo, int, bytes, Callable[[bytes], Any] | None, Any]
+
+
+def _stream(rec: Recording, lazy: bool) -> Iterator[_Streamed]:
+    if lazy:
+        return ((ch, t, data, decode, _UNDECODED) for ch, t, data, decode in rec.undecoded())
+    return ((m.channel, m.log_time_ns, m.payload, None, m.message) for m in rec.decoded())
 
 
 def _aligned(
-    stream: Iterator[DecodedMessage], start_ns: int | None, window_ns: float
-) -> tuple[Iterator[DecodedMessage], int | None]:
+    stream: Iterator[_Streamed], start_ns: int | None, window_ns: float
+) -> tuple[Iterator[_Streamed], int | None]:
     """The stream and its t = 0: the summary's start, or the earliest log time in the window.
 
     Without a summary the first message read need not be the earliest; the messages up to
@@ -229,14 +287,14 @@ def _aligned(
     """
     if start_ns is not None:
         return stream, start_ns
-    ahead: list[DecodedMessage] = []
+    ahead: list[_Streamed] = []
     for msg in stream:
         ahead.append(msg)
-        if msg.log_time_ns > ahead[0].log_time_ns + window_ns:
+        if msg[1] > ahead[0][1] + window_ns:
             break
     if not ahead:
         return stream, None
-    return itertools.chain(ahead, stream), min(m.log_time_ns for m in ahead)
+    return itertools.chain(ahead, stream), min(m[1] for m in ahead)
 
 
 def _one_pass(
@@ -247,15 +305,18 @@ def _one_pass(
     window_s: float,
     adjacent_pairing: bool,
     trust_summary: list[bool],
+    lazy: bool,
     progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
     """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short,
-    :class:`_Realign` if a summary's start time is later than a message."""
+    :class:`_Realign` if a summary's start time is later than a message. ``lazy``: read the
+    messages undecoded and decode only those whose payload differs from their partner's
+    (raises :class:`_Undecodable` if one does not decode)."""
     window_bins = max(1, math.ceil(window_s / bin_s))
     window_ns = window_bins * bin_s * 1e9
     channels: dict[str, list[ChannelInfo | None]] = {}
-    # bin -> topic -> (accident, reference) entries (log time, arrival, message)
-    open_bins: dict[int, dict[str, tuple[list[tuple[int, int, Any]], list[tuple[int, int, Any]]]]] = {}
+    # bin -> topic -> (accident, reference) entries
+    open_bins: dict[int, dict[str, tuple[list[_Entry], list[_Entry]]]] = {}
     acc: dict[str, _Acc] = {}
     read = [0, 0]
     latest = [-math.inf, -math.inf]
@@ -263,12 +324,12 @@ def _one_pass(
     bin_ns = bin_s * 1e9
     scored_below = 0  # every bin below this one has been scored
 
-    streams: list[Iterator[DecodedMessage]] = []
+    streams: list[Iterator[_Streamed]] = []
     starts: list[int | None] = []
     from_summary: list[bool] = []
     for side, rec in enumerate((accident, reference)):
         listed = rec.summary_start_time_ns() if trust_summary[side] else None
-        stream, start = _aligned(rec.decoded(), listed, window_ns)
+        stream, start = _aligned(_stream(rec, lazy), listed, window_ns)
         streams.append(stream)
         starts.append(start)
         from_summary.append(listed is not None)
@@ -278,13 +339,15 @@ def _one_pass(
     recs = (accident, reference)
     total_bytes = accident.size + reference.size
 
-    def bin_of(side: int, msg: DecodedMessage) -> int:
+    def bin_of(side: int, t: int) -> int:
         start = starts[side]
         assert start is not None  # a stream with a message has a start
-        t = msg.log_time_ns
         if t < start and from_summary[side]:
             raise _Realign(side)
-        first[side], last[side] = min(first[side], t), max(last[side], t)
+        if t < first[side]:
+            first[side] = t
+        if t > last[side]:
+            last[side] = t
         if last[side] - first[side] > max_span_ns or abs(t - start) > max_span_ns:
             lo, hi = min(first[side], start), max(last[side], t)
             raise RecordingError(
@@ -298,7 +361,7 @@ def _one_pass(
         if b < scored_below:
             # earlier than bins already scored (or than t = 0): a window as wide as this
             # file's disorder so far (plus rounding) holds it
-            behind = latest[side] - msg.log_time_ns
+            behind = latest[side] - t
             raise _TooLate(behind / 1e9 + 2 * bin_s if math.isfinite(behind) else 0.0)
         return b
 
@@ -324,30 +387,41 @@ def _one_pass(
             for topic, (xs, ys) in open_bins.pop(b).items():
                 xs.sort(key=_LOG_TIME_THEN_ARRIVAL)
                 ys.sort(key=_LOG_TIME_THEN_ARRIVAL)
-                acc.setdefault(topic, _Acc()).add_bin(
-                    b, [x[2] for x in xs], [y[2] for y in ys], tolerance, adjacent_pairing)
+                a = acc.get(topic)
+                if a is None:
+                    a = acc[topic] = _Acc()
+                a.add_bin(b, xs, ys, tolerance, adjacent_pairing)
         scored_below = max(scored_below, below)
 
-    heads: list[DecodedMessage | None] = [next(streams[0], None), next(streams[1], None)]
-    head_bins = [bin_of(s, h) if h is not None else math.inf for s, h in enumerate(heads)]
+    heads: list[_Streamed | None] = [next(streams[0], None), next(streams[1], None)]
+    head_bins = [bin_of(s, h[1]) if h is not None else math.inf for s, h in enumerate(heads)]
+    # per side, the ChannelInfos noted so far by id (held here, so that no id is reused)
+    noted: tuple[dict[int, ChannelInfo], dict[int, ChannelInfo]] = ({}, {})
     since_flush = 0
     while heads[0] is not None or heads[1] is not None:
         side = ACCIDENT if head_bins[ACCIDENT] <= head_bins[REFERENCE] else REFERENCE
         msg = heads[side]
         assert msg is not None
+        ch, t, payload, decode, message = msg
         b = int(head_bins[side])
-        note_channel(side, msg.channel)
-        slot = open_bins.setdefault(b, {}).setdefault(msg.channel.topic, ([], []))
-        slot[side].append((msg.log_time_ns, read[side], msg))
+        if id(ch) not in noted[side]:
+            note_channel(side, ch)
+            noted[side][id(ch)] = ch
+        bin_slots = open_bins.get(b)
+        if bin_slots is None:
+            bin_slots = open_bins[b] = {}
+        slot = bin_slots.get(ch.topic)
+        if slot is None:
+            slot = bin_slots[ch.topic] = ([], [])
+        slot[side].append((t, read[side], ch, payload, decode, message))
         read[side] += 1
-        t = msg.log_time_ns
         if t < latest[side]:
             disorder_ns[side] = max(disorder_ns[side], latest[side] - t)
         else:
             latest[side] = t
         nxt = next(streams[side], None)
         heads[side] = nxt
-        head_bins[side] = bin_of(side, nxt) if nxt is not None else math.inf
+        head_bins[side] = bin_of(side, nxt[1]) if nxt is not None else math.inf
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
@@ -394,7 +468,7 @@ def _one_pass(
     )
 
 
-#: the order of a bin's entries (log time, arrival, message): the message is never compared
+#: the order of a bin's entries (log time, arrival, ...): the message is never compared
 _LOG_TIME_THEN_ARRIVAL = operator.itemgetter(0, 1)
 
 

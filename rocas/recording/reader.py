@@ -538,6 +538,28 @@ class Recording:
             st.decoded += 1
             yield DecodedMessage(ch, log_time, publish_time, sequence, obj, data)
 
+    def undecoded(self) -> Iterator[tuple[ChannelInfo, int, bytes, Callable[[bytes], Any]]]:
+        """Every message rocas has a decoder for, in file order, *not* decoded:
+        (channel, log time [ns], payload, decoder), for a caller that decodes only what it
+        needs (two equal payloads of one schema are one message, decoded once).
+
+        The pass's report counts each of these messages as decoded (and the others as skipped
+        for their encoding, as :meth:`decoded` does). A caller that then finds a payload its
+        decoder refuses holds a report that counted it wrongly, and must read again with
+        :meth:`decoded`, which counts it as undecodable and leaves it out.
+        """
+        stats = None
+        decoders = self._decoders
+        for ch, log_time, _publish_time, _sequence, data in self._attributed():
+            if stats is not self.report.channel_stats:
+                stats = self.report.channel_stats
+            decode = decoders[ch.id] if ch.id in decoders else self._decoder(ch)
+            if decode is None:
+                stats[ch.topic].skipped_encoding += 1
+                continue
+            stats[ch.topic].decoded += 1
+            yield ch, log_time, data, decode
+
     def scan(self) -> Recording:
         """Read the file once to learn its channels, metadata and damage; returns self."""
         if not self._scanned:

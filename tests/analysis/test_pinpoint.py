@@ -95,3 +95,55 @@ def test_exclusions_say_later_only_when_later_and_name_a_tie_by_name():
         "reachable, with the same change point as a (1 s) at the same distance from /cmd; "
         "the tie goes to a by name"
     )
+
+
+def _networkx_walk(cmg, t_star, control, delta):
+    """Algorithm 1's reachable set, depths and walk computed with networkx on ``cmg.graph``
+    (the walk rocas takes must be the one networkx's shortest_path takes)."""
+    import networkx as nx
+
+    pruned = cmg.graph.copy()
+    for u, v in cmg.graph.edges:
+        tu, tv = t_star[u], t_star[v]
+        if tu is None or tv is None or not tv - delta <= tu <= tv:
+            pruned.remove_edge(u, v)
+    rev = pruned.reverse(copy=False)
+    start = (CHANNEL, control)
+    if start not in rev:
+        return frozenset(), {}, rev
+    reachable = frozenset(n for k, n in nx.descendants(rev, start) if k == MODULE)
+    depth = nx.single_source_shortest_path_length(rev, start)
+    return reachable, depth, rev
+
+
+def test_walk_reachability_and_ties_match_networkx_on_random_graphs():
+    """Many shortest walks tie in a CMG (a module writing two channels its reader reads); the
+    walk must be networkx's, as before rocas stopped importing it for a diff."""
+    import random
+
+    import networkx as nx
+
+    rng = random.Random(7)
+    ties = 0
+    for _ in range(400):
+        n_mod, n_ch = rng.randint(2, 6), rng.randint(2, 7)
+        chans = [f"/c{i}" for i in range(n_ch)]
+        modules = {}
+        for m in range(n_mod):
+            modules[f"m{m}"] = {"reads": rng.sample(chans, rng.randint(0, min(3, n_ch))),
+                                "writes": rng.sample(chans, rng.randint(1, 2))}
+        cmg = build_cmg([], parse_cmg({"modules": modules}))
+        t = {c: rng.choice([None, 1.0, 2.0, 2.5, 4.0]) for c in chans}
+        control = rng.choice(chans)
+        delta = rng.choice([1.0, 3.0])
+        r = find_initial_module(cmg, t, control, delta)
+        reachable, depth, rev = _networkx_walk(cmg, r.t_star, control, delta)
+        assert r.reachable == reachable
+        if r.deviating_module is None:
+            continue
+        target = (MODULE, r.deviating_module)
+        expected = tuple(n for _, n in nx.shortest_path(rev, (CHANNEL, control), target))
+        assert r.path == expected
+        ties += len(list(nx.all_shortest_paths(rev, (CHANNEL, control), target))) > 1
+        assert depth[target] == len(r.path) - 1
+    assert ties >= 10  # the ties the test is about did occur

@@ -166,3 +166,71 @@ def test_protobuf_schemas_compare_by_definition_not_by_file_order(tmp_path):
     c = _write_raw(tmp_path / "c.mcap", [("/c", 0.0, 1)], fds=changed)
     with pytest.raises(RecordingError, match="ControlCommand in both, defined differently"):
         _series(tmp_path, a, c)
+
+
+def _counting_cache():
+    """A DecoderCache whose decoders count the payloads they decode (one decoder per schema,
+    as in a plain cache)."""
+    cache, calls, made = DecoderCache(), [], {}
+    plain = cache.decoder
+
+    def decoder(*key):
+        decode = plain(*key)
+        if decode is None or key in made:
+            return made.get(key)
+
+        def counted(payload):
+            calls.append(payload)
+            return decode(payload)
+
+        made[key] = counted
+        return counted
+
+    cache.decoder = decoder  # type: ignore[method-assign]
+    return cache, calls
+
+
+def test_equal_payloads_are_decoded_once_and_differing_ones_on_both_sides(tmp_path):
+    a = _write(tmp_path / "a.mcap", [0.0, 0.1, 0.2, 0.3], [1, 2, 3, 4])
+    b = _write(tmp_path / "b.mcap", [0.0, 0.1, 0.2, 0.3], [1, 2, 5, 6])
+    cache, calls = _counting_cache()
+    res = compute_series(open_recording(a, cache), open_recording(b, cache), bin_s=0.1)
+    assert list(res.series["/control"].mdr) == pytest.approx([0, 0, 1 / N_FIELDS, 1 / N_FIELDS])
+    assert len(calls) == 2 + 2 * 2  # one of each equal pair, both of each differing pair
+    assert res.messages_read == (4, 4)
+
+
+def _json_recording(path, messages):
+    """A JSON recording of (time [s], payload bytes) on /j."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        cid = w.register_channel("/j", "json", w.register_schema("s", "jsonschema", b"{}"))
+        for seq, (t, data) in enumerate(messages):
+            w.add_message(cid, log_time=int(t * S), publish_time=int(t * S), data=data,
+                          sequence=seq)
+        w.finish()
+    return path
+
+
+def test_undecodable_messages_are_left_out_even_where_both_files_hold_them(tmp_path):
+    """A payload that does not decode counts for nothing, whether or not the other file holds
+    the same bytes (which the series otherwise never decodes twice)."""
+    a = _json_recording(tmp_path / "a.mcap", [
+        (0.0, b'{"v": 1}'), (0.1, b"{bad"), (0.2, b'{"v": 3}'), (0.3, b'{"v": 4}')])
+    b = _json_recording(tmp_path / "b.mcap", [
+        (0.0, b'{"v": 1}'), (0.1, b"{bad"), (0.2, b'{"v": 3}'), (0.3, b"{bad"),
+        (0.301, b'{"v": 4}')])
+    cache = DecoderCache()
+    rec_a, rec_b = open_recording(a, cache), open_recording(b, cache)
+    res = compute_series(rec_a, rec_b, bin_s=0.1)
+    s = res.series["/j"]
+    assert list(s.times_s) == pytest.approx([0.0, 0.2, 0.3])
+    assert list(s.mdr) == [0.0, 0.0, 0.0]
+    assert s.messages.tolist() == [[1, 1], [1, 1], [1, 1]]
+    assert res.messages_read == (3, 3)
+    stats_a, stats_b = rec_a.report.channel_stats["/j"], rec_b.report.channel_stats["/j"]
+    assert (stats_a.decoded, stats_a.undecodable) == (3, 1)
+    assert (stats_b.decoded, stats_b.undecodable) == (3, 2)
