@@ -36,7 +36,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rocas.errors import InputError, TopologyError
-from rocas.recording.annotate import ChannelAnnotation
 from rocas.recording.reader import ChannelInfo
 from rocas.recording.topology import (
     CONTROL_ROLE,
@@ -49,6 +48,8 @@ from rocas.recording.topology import (
 
 if TYPE_CHECKING:
     import networkx as nx
+
+    from rocas.recording.annotate import ChannelAnnotation
 
 CHANNEL, MODULE = "channel", "module"
 Node = tuple[str, str]  # (kind, name)
@@ -102,6 +103,8 @@ class CmgSpec:
 
     def annotations(self) -> dict[str, ChannelAnnotation]:
         """Per channel the file names: its writers and readers (for ``rocas annotate``)."""
+        from rocas.recording.annotate import ChannelAnnotation
+
         return {
             topic: ChannelAnnotation(
                 writers=tuple(m for m, cs in self.writes.items() if topic in cs),

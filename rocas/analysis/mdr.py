@@ -197,6 +197,7 @@ def _unequal(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
     fields = plan.fields
     if not fields:
         return 0.0
+    exact = tol.atol == 0.0 and tol.rtol == 0.0
     total = 0.0
     for f, va, vb in zip(fields, plan.values(a), plan.values(b), strict=True):
         kind = f.kind
@@ -204,7 +205,8 @@ def _unequal(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
             if va != vb:
                 total += 1.0
         elif kind == _FLOAT:
-            if va != vb and _float_differs(va, vb, tol):
+            # unequal and not both NaN: different when exact (else within the tolerance?)
+            if va != vb and (va == va or vb == vb) and (exact or _float_differs(va, vb, tol)):
                 total += 1.0
         elif kind == _MESSAGE:
             if va != vb:

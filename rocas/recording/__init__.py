@@ -1,21 +1,27 @@
 """The MCAP boundary: a streaming reader, a writer and the topology contract."""
 
-from rocas.recording.annotate import (
-    AnnotateReport,
-    ChannelAnnotation,
-    annotate_recording,
-    read_channels,
-)
-from rocas.recording.attach import attach_channel
-from rocas.recording.reader import (
-    ChannelInfo,
-    ChannelStats,
-    DecodedMessage,
-    RawMessage,
-    ReadReport,
-    Recording,
-    open_recording,
-)
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rocas.recording.annotate import (
+        AnnotateReport,
+        ChannelAnnotation,
+        annotate_recording,
+        read_channels,
+    )
+    from rocas.recording.attach import attach_channel
+    from rocas.recording.reader import (
+        ChannelInfo,
+        ChannelStats,
+        DecodedMessage,
+        RawMessage,
+        ReadReport,
+        Recording,
+        open_recording,
+    )
+    from rocas.recording.writer import RecordingWriter, register_protobuf_channel
+
 from rocas.recording.topology import (
     CONTROL_ROLE,
     READERS_KEY,
@@ -25,7 +31,29 @@ from rocas.recording.topology import (
     split_modules,
     topology_metadata,
 )
-from rocas.recording.writer import RecordingWriter, register_protobuf_channel
+
+# loaded on first use, so that a reader (``rocas diff``) does not import the writer's modules
+_LAZY = {
+    **dict.fromkeys(("AnnotateReport", "ChannelAnnotation", "annotate_recording",
+                     "read_channels"), "rocas.recording.annotate"),
+    "attach_channel": "rocas.recording.attach",
+    **dict.fromkeys(("ChannelInfo", "ChannelStats", "DecodedMessage", "RawMessage", "ReadReport",
+                     "Recording", "open_recording"), "rocas.recording.reader"),
+    **dict.fromkeys(("RecordingWriter", "register_protobuf_channel"), "rocas.recording.writer"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "CONTROL_ROLE",

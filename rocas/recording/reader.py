@@ -853,18 +853,20 @@ def _inflate(chunk: Chunk, limit: int) -> bytes:
     if chunk.compression == "":
         data = bytes(chunk.data)
     elif chunk.compression == "zstd":
-        import zstandard
+        data = _inflate_one_frame(chunk.data, size)
+        if data is None:
+            import zstandard
 
-        reader = zstandard.ZstdDecompressor().stream_reader(
-            io.BytesIO(chunk.data), read_across_frames=True
-        )
-        out = bytearray()
-        while len(out) <= size:  # read in pieces: a lying frame header must not size a buffer
-            piece = reader.read(min(4 << 20, size + 1 - len(out)))
-            if not piece:
-                break
-            out += piece
-        data = bytes(out)
+            reader = zstandard.ZstdDecompressor().stream_reader(
+                io.BytesIO(chunk.data), read_across_frames=True
+            )
+            out = bytearray()
+            while len(out) <= size:  # read in pieces: a lying frame header must not size a buffer
+                piece = reader.read(min(4 << 20, size + 1 - len(out)))
+                if not piece:
+                    break
+                out += piece
+            data = bytes(out)
     elif chunk.compression == "lz4":
         import lz4.frame
 
@@ -879,6 +881,21 @@ def _inflate(chunk: Chunk, limit: int) -> bytes:
             f"computed {zlib.crc32(data):#010x})"
         )
     return data
+
+
+def _inflate_one_frame(compressed: bytes, size: int) -> bytes | None:
+    """A chunk that is one zstd frame whose header gives ``size`` (what writers make),
+    decompressed in one call into a buffer of that size; None for anything else (more frames,
+    trailing bytes, another size, damage), which the streamed path reads as before."""
+    import zstandard
+
+    try:
+        if zstandard.frame_content_size(compressed) != size:
+            return None
+        data = zstandard.ZstdDecompressor().decompress(compressed, allow_extra_data=False)
+    except zstandard.ZstdError:
+        return None
+    return data if len(data) == size else None
 
 
 #: A message record as the reader passes it on: (channel id, log time [ns], publish time [ns],

@@ -213,3 +213,25 @@ def test_a_chunk_inflating_beyond_the_limit_and_the_file_size_is_skipped(tmp_pat
     assert list(rec.messages()) == []
     ((_, reason),) = rec.report.skipped_chunks
     assert "more than rocas inflates (4096 bytes: 4096 bytes or the file's size" in reason
+
+
+@pytest.mark.parametrize("frames", [1, 2])
+def test_a_zstd_chunk_inflates_whether_it_is_one_frame_or_several(frames):
+    """One frame that states its size is inflated in one call; anything else (here two
+    frames, or a frame one byte short of what the chunk claims) takes the streamed path."""
+    import zlib
+
+    import zstandard
+    from mcap.records import Chunk
+
+    raw = bytes(range(256)) * 300
+    parts = [raw] if frames == 1 else [raw[:1000], raw[1000:]]
+    data = b"".join(zstandard.ZstdCompressor().compress(p) for p in parts)
+    chunk = Chunk(compression="zstd", data=data, message_start_time=0, message_end_time=0,
+                  uncompressed_crc=zlib.crc32(raw), uncompressed_size=len(raw))
+    assert reader._inflate(chunk, 1 << 20) == raw
+    assert (reader._inflate_one_frame(data, len(raw)) is None) == (frames == 2)
+    short = Chunk(compression="zstd", data=data, message_start_time=0, message_end_time=0,
+                  uncompressed_crc=0, uncompressed_size=len(raw) + 1)
+    with pytest.raises(ValueError, match="inflates to"):
+        reader._inflate(short, 1 << 20)
