@@ -80,11 +80,14 @@ class _Field:
 @dataclass(frozen=True)
 class _Plan:
     """How to compare messages of one type: its fields, and ``values(message)``, which returns
-    the message's field values in the order of ``fields`` (one C call)."""
+    the message's field values in the order of ``fields`` (one C call). ``flat``: it has
+    fields, and all are single leaves (a point, a header), so that two such messages compare
+    exactly as their two tuples of values."""
 
     full_name: str
     fields: tuple[_Field, ...]
     values: Callable[[Message], tuple[Any, ...]] = tuple
+    flat: bool = False
 
 
 def _values_getter(names: list[str]) -> Callable[[Message], tuple[Any, ...]]:
@@ -146,7 +149,14 @@ def _plan_for(desc: Descriptor, memo: dict[Descriptor, _Plan]) -> _Plan:
             fields.append(_Field(fd.name, _REP_SCALAR if is_repeated else _SCALAR))
     object.__setattr__(plan, "fields", tuple(fields))
     object.__setattr__(plan, "values", _values_getter([f.name for f in fields]))
+    object.__setattr__(plan, "flat", bool(fields) and all(f.kind in (_SCALAR, _FLOAT)
+                                                          for f in fields))
     return plan
+
+
+def _leaves_differing(va: tuple[Any, ...], vb: tuple[Any, ...]) -> int:
+    """How many of two flat messages' leaves differ exactly (two NaNs are the same leaf)."""
+    return sum(1 for x, y in zip(va, vb, strict=True) if x != y and (x == x or y == y))
 
 
 def _float_differs(a: float, b: float, tol: Tolerance) -> bool:
@@ -210,7 +220,11 @@ def _unequal(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
                 total += 1.0
         elif kind == _MESSAGE:
             if va != vb:
-                total += _unequal(va, vb, f.sub, tol)  # type: ignore[arg-type]
+                sub = f.sub
+                if exact and sub.flat:  # type: ignore[union-attr]
+                    total += _leaves_differing(sub.values(va), sub.values(vb)) / len(sub.fields)  # type: ignore[union-attr]
+                else:
+                    total += _unequal(va, vb, sub, tol)  # type: ignore[arg-type]
         elif kind == _REP_MESSAGE:
             n = len(va)
             if n != len(vb):
@@ -218,8 +232,13 @@ def _unequal(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
             elif n:
                 sub = f.sub
                 # equal elements score 0: leaving them out of the sum does not change it
-                total += sum(_unequal(x, y, sub, tol)  # type: ignore[arg-type]
-                             for x, y in zip(va, vb, strict=True) if x != y) / n
+                if exact and sub.flat:  # type: ignore[union-attr]
+                    get, width = sub.values, len(sub.fields)  # type: ignore[union-attr]
+                    total += sum(_leaves_differing(get(x), get(y)) / width
+                                 for x, y in zip(va, vb, strict=True) if x != y) / n
+                else:
+                    total += sum(_unequal(x, y, sub, tol)  # type: ignore[arg-type]
+                                 for x, y in zip(va, vb, strict=True) if x != y) / n
         elif kind == _MAP:
             total += _map(va, vb, f, tol)
         else:  # repeated scalar / float
