@@ -88,9 +88,23 @@ def median_filter(values: np.ndarray, width: int) -> np.ndarray:
         return values
     width = width + 1 - width % 2  # odd
     half = width // 2
-    padded = np.concatenate([np.full(half, np.nan), values, np.full(half, np.nan)])
-    windows = np.lib.stride_tricks.sliding_window_view(padded, width)
-    return np.nanmedian(windows, axis=1)
+    n = len(values)
+    out = np.empty(n, dtype=np.float64)
+    if n >= width:  # full windows: the middle of each sorted window
+        windows = np.lib.stride_tricks.sliding_window_view(values, width)
+        out[half:n - half] = np.sort(windows, axis=1)[:, half]
+    for i in (*range(min(half, n)), *range(max(n - half, half), n)):
+        out[i] = median(values[max(0, i - half):i + half + 1])
+    return out
+
+
+def median(values: np.ndarray) -> float:
+    """The median of ``values`` (shape (n,), n >= 1, no NaN): the middle value, or the mean of
+    the two middle ones, as ``np.median`` computes it (without the import of ``numpy.ma`` that
+    ``np.median`` costs)."""
+    s = np.sort(np.asarray(values, dtype=np.float64))
+    k = len(s) // 2
+    return float(s[k]) if len(s) % 2 else float((s[k - 1] + s[k]) / 2.0)
 
 
 @dataclass(frozen=True)
@@ -213,7 +227,7 @@ def _onsets(raw: np.ndarray, smooth: np.ndarray, ends: list[int], reach: int) ->
         start = out[-1] if out else 0
         stop = ends[i + 1] if i + 1 < len(ends) else len(raw)
         before, after = raw[start:max(start + 1, k - reach)], smooth[k:stop]
-        level, new = float(np.median(before)), float(np.median(after))
+        level, new = median(before), median(after)
         tol = 3.0 * float(np.std(before)) + 1e-12
         sign = 1.0 if new > level else -1.0
         j = k
@@ -242,7 +256,7 @@ def _significant(raw: np.ndarray, smooth: np.ndarray, idx: tuple[int, ...],
         if len(before) < 2 or len(after) == 0:
             kept.append(k)
             continue
-        shift = abs(float(np.median(after)) - float(np.median(before)))
+        shift = abs(median(after) - median(before))
         if shift > significance * float(np.std(before)) + 1e-12:
             kept.append(k)
     return tuple(kept)

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from rocas.analysis.changepoints import ChangePointConfig, ChangePoints, detect
+from rocas.analysis.changepoints import median as changepoint_median
 from rocas.analysis.cmg import (
     MODULE,
     ChannelModuleGraph,
@@ -428,7 +429,7 @@ def check_pair(
         both = (s.messages[:, 0] > 0) & (s.messages[:, 1] > 0)
         if both.any():
             start_mdr.append(float(s.mdr[both][:START_BINS].mean()))
-    median = float(np.median(start_mdr)) if start_mdr else 0.0
+    median = changepoint_median(np.asarray(start_mdr)) if start_mdr else 0.0
     if median > MAX_START_MDR:
         differ = (f"at the start, where two runs of one scenario agree, their shared channels "
                   f"already differ (median MDR {median:.2f} over each channel's first "

@@ -266,14 +266,15 @@ def compute_series(
                 raise
 
 
-#: A message as a pass streams it: (channel, log time [ns], payload, decoder, message), as in
-#: :data:`_Entry`.
-_Streamed = tuple[ChannelInfo, int, bytes, Callable[[bytes], Any] | None, Any]
+#: A message as a pass streams it: (channel, log time [ns], payload, decoder) read undecoded
+#: (as :meth:`Recording.undecoded` yields it), or (channel, log time [ns], payload, None,
+#: message) decoded.
+_Streamed = tuple[Any, ...]
 
 
 def _stream(rec: Recording, lazy: bool) -> Iterator[_Streamed]:
     if lazy:
-        return ((ch, t, data, decode, _UNDECODED) for ch, t, data, decode in rec.undecoded())
+        return rec.undecoded()
     return ((m.channel, m.log_time_ns, m.payload, None, m.message) for m in rec.decoded())
 
 
@@ -402,7 +403,7 @@ def _one_pass(
         side = ACCIDENT if head_bins[ACCIDENT] <= head_bins[REFERENCE] else REFERENCE
         msg = heads[side]
         assert msg is not None
-        ch, t, payload, decode, message = msg
+        ch, t, payload, decode = msg[0], msg[1], msg[2], msg[3]
         b = int(head_bins[side])
         if id(ch) not in noted[side]:
             note_channel(side, ch)
@@ -413,7 +414,8 @@ def _one_pass(
         slot = bin_slots.get(ch.topic)
         if slot is None:
             slot = bin_slots[ch.topic] = ([], [])
-        slot[side].append((t, read[side], ch, payload, decode, message))
+        slot[side].append((t, read[side], ch, payload, decode,
+                           _UNDECODED if decode is not None else msg[4]))
         read[side] += 1
         if t < latest[side]:
             disorder_ns[side] = max(disorder_ns[side], latest[side] - t)

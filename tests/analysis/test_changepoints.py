@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 import ruptures
 
-from rocas.analysis.changepoints import ChangePointConfig, detect, median_filter, pelt_l2
+from rocas.analysis.changepoints import ChangePointConfig, detect, median, median_filter, pelt_l2
 
 
 def _step(n=200, at=120, low=0.1, high=0.5, noise=0.02, seed=0):
@@ -120,3 +120,18 @@ def test_onset_ignores_a_noisy_baseline_and_stays_within_the_median_reach():
     assert cps.indices[0] == 61  # 0.205 is within the baseline's noise
     far = np.array([0.0] * 40 + [0.02] * 6 + [0.5] * 20)
     assert detect(far, np.arange(len(far)) * 0.1, ChangePointConfig()).indices[0] >= 44
+
+
+def test_running_median_and_median_agree_with_numpy_to_the_bit():
+    """The running median truncates its windows at the ends, as np.nanmedian over NaN-padded
+    windows does; both medians take the mean of the two middle values of an even count."""
+    rng = np.random.default_rng(3)
+    for trial in range(400):
+        n, width = int(rng.integers(3, 30)), int(rng.integers(2, 9))
+        values = rng.random(n) if trial % 2 else rng.integers(0, 4, n) / 3.0
+        w = width + 1 - width % 2
+        padded = np.concatenate([np.full(w // 2, np.nan), values, np.full(w // 2, np.nan)])
+        expected = np.nanmedian(np.lib.stride_tricks.sliding_window_view(padded, w), axis=1)
+        assert np.array_equal(median_filter(values, width), expected)
+        k = int(rng.integers(1, n + 1))
+        assert median(values[:k]) == float(np.median(values[:k]))

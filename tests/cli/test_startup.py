@@ -40,3 +40,6 @@ def test_a_diff_imports_only_what_it_uses():
                       str(demo / "a01_scripted_reference.mcap"), "--json")
     assert "rocas.analysis.diff" in names
     assert _top(names, NOT_FOR_OPTIONS + ("rich", "rocas.search", "rocas.sim")) == set()
+    # nor networkx (the CMG walk needs no graph library), numpy.ma (np.median's import) or
+    # the recording writer
+    assert _top(names, ("networkx", "numpy.ma", "rocas.recording.writer", "mcap.writer")) == set()
