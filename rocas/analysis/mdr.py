@@ -32,7 +32,7 @@ import math
 import operator
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -80,14 +80,14 @@ class _Field:
 @dataclass(frozen=True)
 class _Plan:
     """How to compare messages of one type: its fields, and ``values(message)``, which returns
-    the message's field values in the order of ``fields`` (one C call). ``flat``: it has
-    fields, and all are single leaves (a point, a header), so that two such messages compare
-    exactly as their two tuples of values."""
+    the message's field values in the order of ``fields`` (one C call). ``compare`` is the
+    plan compiled by :func:`_compiled` (once, on first use)."""
 
     full_name: str
     fields: tuple[_Field, ...]
     values: Callable[[Message], tuple[Any, ...]] = tuple
-    flat: bool = False
+    compare: Callable[[Message, Message, Tolerance, bool], float] | None = field(
+        default=None, compare=False, repr=False)
 
 
 def _values_getter(names: list[str]) -> Callable[[Message], tuple[Any, ...]]:
@@ -149,14 +149,56 @@ def _plan_for(desc: Descriptor, memo: dict[Descriptor, _Plan]) -> _Plan:
             fields.append(_Field(fd.name, _REP_SCALAR if is_repeated else _SCALAR))
     object.__setattr__(plan, "fields", tuple(fields))
     object.__setattr__(plan, "values", _values_getter([f.name for f in fields]))
-    object.__setattr__(plan, "flat", bool(fields) and all(f.kind in (_SCALAR, _FLOAT)
-                                                          for f in fields))
     return plan
 
 
-def _leaves_differing(va: tuple[Any, ...], vb: tuple[Any, ...]) -> int:
-    """How many of two flat messages' leaves differ exactly (two NaNs are the same leaf)."""
-    return sum(1 for x, y in zip(va, vb, strict=True) if x != y and (x == x or y == y))
+def _compiled(plan: _Plan) -> Callable[[Message, Message, Tolerance, bool], float]:
+    """:func:`_unequal` for one message type as straight-line Python, built once per plan
+    (as dataclasses builds ``__init__``): one block per field, in field order, with the same
+    operations in the same order, so that the score is the same to the bit, without the
+    per-field loop and dispatch on the field's kind. Its last argument says whether ``tol``
+    is exact."""
+    if plan.compare is not None:
+        return plan.compare
+    fields = plan.fields
+    env: dict[str, Any] = {"values": plan.values, "fields": fields, "_map": _map,
+                           "_float_differs": _float_differs,
+                           "_repeated_leaves": _repeated_leaves}
+    body = ["def compare(a, b, tol, exact):"]
+    if not fields:
+        body.append("    return 0.0")
+    else:
+        body += ["    ta = values(a)", "    tb = values(b)", "    total = 0.0"]
+    for i, f in enumerate(fields):
+        kind = f.kind
+        body.append(f"    va = ta[{i}]; vb = tb[{i}]")
+        if kind == _SCALAR:
+            body += ["    if va != vb:", "        total += 1.0"]
+        elif kind == _FLOAT:
+            # unequal and not both NaN: different when exact (else: within the tolerance?)
+            body += ["    if va != vb and (va == va or vb == vb) and "
+                     "(exact or _float_differs(va, vb, tol)):", "        total += 1.0"]
+        elif kind == _MESSAGE:
+            body += ["    if va != vb:", f"        total += sub{i}(va, vb, tol, exact)"]
+        elif kind == _REP_MESSAGE:
+            # equal elements score 0: leaving them out of the sum does not change it
+            body += ["    n = len(va)", "    if n != len(vb):", "        total += 1.0",
+                     "    elif n:",
+                     f"        total += sum(sub{i}(x, y, tol, exact) "
+                     "for x, y in zip(va, vb) if x != y) / n"]
+        elif kind == _MAP:
+            body.append(f"    total += _map(va, vb, fields[{i}], tol)")
+        else:
+            body.append(f"    total += _repeated_leaves(va, vb, {kind == _REP_FLOAT}, tol)")
+    if fields:
+        body.append(f"    return total / {len(fields)}")
+    exec("\n".join(body), env)  # noqa: S102 (code built above from field kinds and indices)
+    compare = env["compare"]
+    object.__setattr__(plan, "compare", compare)
+    for i, f in enumerate(fields):  # after storing it: a recursive type finds its own
+        if f.kind in (_MESSAGE, _REP_MESSAGE):
+            env[f"sub{i}"] = _compiled(f.sub)  # type: ignore[arg-type]
+    return compare
 
 
 def _float_differs(a: float, b: float, tol: Tolerance) -> bool:
@@ -203,47 +245,15 @@ def _message(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
 
 def _unequal(a: Message, b: Message, plan: _Plan, tol: Tolerance) -> float:
     """MDR of two messages of one class, field by field (any two; cheapest when they differ:
-    it skips the whole-message equality check, which costs a walk over both in C)."""
-    fields = plan.fields
-    if not fields:
-        return 0.0
-    exact = tol.atol == 0.0 and tol.rtol == 0.0
-    total = 0.0
-    for f, va, vb in zip(fields, plan.values(a), plan.values(b), strict=True):
-        kind = f.kind
-        if kind == _SCALAR:
-            if va != vb:
-                total += 1.0
-        elif kind == _FLOAT:
-            # unequal and not both NaN: different when exact (else within the tolerance?)
-            if va != vb and (va == va or vb == vb) and (exact or _float_differs(va, vb, tol)):
-                total += 1.0
-        elif kind == _MESSAGE:
-            if va != vb:
-                sub = f.sub
-                if exact and sub.flat:  # type: ignore[union-attr]
-                    total += _leaves_differing(sub.values(va), sub.values(vb)) / len(sub.fields)  # type: ignore[union-attr]
-                else:
-                    total += _unequal(va, vb, sub, tol)  # type: ignore[arg-type]
-        elif kind == _REP_MESSAGE:
-            n = len(va)
-            if n != len(vb):
-                total += 1.0
-            elif n:
-                sub = f.sub
-                # equal elements score 0: leaving them out of the sum does not change it
-                if exact and sub.flat:  # type: ignore[union-attr]
-                    get, width = sub.values, len(sub.fields)  # type: ignore[union-attr]
-                    total += sum(_leaves_differing(get(x), get(y)) / width
-                                 for x, y in zip(va, vb, strict=True) if x != y) / n
-                else:
-                    total += sum(_unequal(x, y, sub, tol)  # type: ignore[arg-type]
-                                 for x, y in zip(va, vb, strict=True) if x != y) / n
-        elif kind == _MAP:
-            total += _map(va, vb, f, tol)
-        else:  # repeated scalar / float
-            total += _repeated_leaves(va, vb, kind == _REP_FLOAT, tol)
-    return total / len(fields)
+    it skips the whole-message equality check, which costs a walk over both in C).
+
+    Per field: a leaf scores 1 if it differs; a submessage scores its own MDR when it is
+    not equal; a repeated message field scores 1 if the lengths differ, else the mean of
+    its elements' MDRs (equal elements skipped: they score 0); map and repeated leaf fields
+    as :func:`_map` and :func:`_repeated_leaves`. The message scores the mean over its
+    fields (:func:`_compiled` runs these rules).
+    """
+    return _compiled(plan)(a, b, tol, tol.atol == 0.0 and tol.rtol == 0.0)
 
 
 def _map(va: Any, vb: Any, f: _Field, tol: Tolerance) -> float:

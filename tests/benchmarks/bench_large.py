@@ -34,7 +34,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from bench_diff import compare_whole_processes  # noqa: E402
+from bench_diff import bytecode_cached_env, compare_whole_processes  # noqa: E402
 from foreign_stack import (  # noqa: E402
     CONTROL,
     RATES,
@@ -123,6 +123,8 @@ def main() -> None:
     ap.add_argument("--keep", default=None, metavar="DIR",
                     help="write the pair to DIR and keep it (reused when it is there)")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each process (default 2)")
+    ap.add_argument("--cold", action="store_true",
+                    help="run the children in this environment (bench_diff.py --cold)")
     args = ap.parse_args()
     target = int(args.gb * 1e9)
     with tempfile.TemporaryDirectory(prefix="rocas-bench-large-", dir=args.dir) as tmp:
@@ -137,8 +139,10 @@ def main() -> None:
             print(f"written in {time.perf_counter() - t0:.0f} s")
         sizes = [acc.stat().st_size, ref.stat().st_size]
         print(f"recordings: accident {sizes[0] / 1e6:.0f} MB, reference {sizes[1] / 1e6:.0f} MB")
-        out = compare_whole_processes(str(acc), str(ref), args.repeat,
-                                      "lidar-heavy pair (bench_large)", 3.0)
+        with tempfile.TemporaryDirectory() as pycache:  # bytecode as installed (bench_diff)
+            out = compare_whole_processes(str(acc), str(ref), args.repeat,
+                                          "lidar-heavy pair (bench_large)", 3.0,
+                                          None if args.cold else bytecode_cached_env(pycache))
         res = json.loads(out)
         print(f"  deviating module {res['deviating_module']}, messages read "
               f"{res['messages_read']}")
