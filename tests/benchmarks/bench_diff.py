@@ -21,7 +21,12 @@ that sets ``PYTHONDONTWRITEBYTECODE`` (as the project's sessions do) compiles ro
 source in every ``rocas diff`` (about 0.07 s of CPU), while the baseline's libraries come
 with their bytecode. ``--cold`` runs the children in the environment as it is.
 
+``--before PYTHON`` also times ``PYTHON -m rocas diff`` (another checkout's interpreter, e.g.
+main's venv) on the demo pair, alternated with the two others, and checks its JSON output is
+this one's.
+
 Usage: python tests/benchmarks/bench_diff.py [--repeat 5] [--long-factor 10] [--cold]
+       [--before PYTHON]
 """
 
 from __future__ import annotations
@@ -121,6 +126,49 @@ def compare_whole_processes(accident: str, reference: str, repeat: int, label: s
     return answer
 
 
+def compare_before_after(accident: str, reference: str, repeat: int, before_python: str,
+                         env: dict[str, str] | None) -> None:
+    """CPU of :data:`BASELINE`, ``before_python -m rocas diff`` and this ``rocas diff``, in
+    turn ``repeat`` times (after one untimed run each), all from a neutral directory so that
+    ``-m rocas`` finds each interpreter's own rocas."""
+    here = str(Path(__file__).resolve().parents[2])
+    cmds = {
+        "read+decode": ([sys.executable, "-c", BASELINE, accident, reference], None),
+        "before": ([before_python, "-m", "rocas", "diff", accident, reference, "--json"], None),
+        "this": ([sys.executable, "-m", "rocas", "diff", accident, reference, "--json"], here),
+    }
+    cpu: dict[str, list[float]] = {k: [] for k in cmds}
+    rss = dict.fromkeys(cmds, 0.0)
+    out: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as neutral:
+        for argv, path in cmds.values():
+            run_child(argv, env=_with_path(env, path), cwd=neutral)
+        for _ in range(repeat):
+            for name, (argv, path) in cmds.items():
+                _wall, used, peak_mb, out[name] = run_child(argv, env=_with_path(env, path),
+                                                            cwd=neutral)
+                cpu[name].append(used)
+                rss[name] = max(rss[name], peak_mb)
+    base = cpu["read+decode"]
+    print(f"demo pair, before ({before_python}) and after: CPU, {repeat} runs each")
+    for name, xs in cpu.items():
+        ratio = "" if name == "read+decode" else (
+            f"  ratio min {min(xs) / min(base):.2f}x, median "
+            f"{statistics.median(xs) / statistics.median(base):.2f}x")
+        print(f"  {name:12s} CPU min {min(xs):.3f} s  median {statistics.median(xs):.3f} s  "
+              f"peak RSS {rss[name]:.0f} MB{ratio}")
+    print(f"  same --json output before and after: {out['before'] == out['this']}")
+
+
+def _with_path(env: dict[str, str] | None, path: str | None) -> dict[str, str] | None:
+    """``env`` (or this environment) with ``path`` first on PYTHONPATH, if given."""
+    if path is None:
+        return env
+    out = dict(os.environ if env is None else env)
+    out["PYTHONPATH"] = os.pathsep.join(filter(None, [path, out.get("PYTHONPATH")]))
+    return out
+
+
 def raw_bytes(path: str) -> int:
     with open(path, "rb") as f:
         return sum(len(m.data) for _, _, m in make_reader(f).iter_messages())
@@ -169,6 +217,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--cold", action="store_true",
                     help="run the children in this environment (no bytecode cache of their own)")
+    ap.add_argument("--before", metavar="PYTHON",
+                    help="also time PYTHON -m rocas diff on the demo pair (module docstring)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as pycache:
         run(args, None if args.cold else bytecode_cached_env(pycache))
@@ -180,6 +230,8 @@ def run(args: argparse.Namespace, env: dict[str, str] | None) -> None:
     acc, ref = str(DEMO / "a01_scripted_accident.mcap"), str(DEMO / "a01_scripted_reference.mcap")
     out = compare_whole_processes(acc, ref, args.repeat, "demo pair (recordings/demo)", 1.5, env)
     print(f"  deviating module: {json.loads(out)['deviating_module']}")
+    if args.before:
+        compare_before_after(acc, ref, args.repeat, args.before, env)
     with tempfile.TemporaryDirectory() as tmp:
         cfg = MixConfig(duration_s=30.0)
         t = time.perf_counter()
