@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -49,6 +49,7 @@ from rocas.search.ga import Candidate, GenerationStats, run_search
 from rocas.search.minimize import shrink_magnitudes, shrink_set
 from rocas.search.objectives import scenario_dissimilarity, suspiciousness
 from rocas.search.space import Mutation, MutationSpace
+from rocas.sim.oracles import Outcome
 
 #: a world counts as accident-free only when the ego also gets within this of as far as it
 #: had driven at the accident [m]: a light that stays red avoids the accident by keeping the
@@ -132,12 +133,46 @@ def path_length_m(xy: np.ndarray) -> float:
     return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
 
 
-def reference_violation(r: VariantResult, needed_m: float) -> float:
+def without_prior_emergencies(outcome: Outcome, original: Outcome, before_s: float,
+                              tolerance_s: float) -> Outcome:
+    """``outcome`` without the emergencies (an estop, a hard brake) that the accident's own
+    execution (``original``) also had, at the same time (within ``tolerance_s`` [s]) and
+    before ``before_s`` [s] (the accident's time less Algorithm 1's reaction window).
+
+    Such an event is not the accident under analysis but part of the prefix the two
+    executions share (A7 laid out with the ego stopping close behind a long truck: its control
+    raises an estop at 0.25 s in every world, long before the car behind hits it at 7.35 s);
+    counted as an accident it would leave no world accident-free, and the analysis would end
+    without a reference. An emergency within the window before the accident belongs to it
+    (A3: the ego brakes hard 2.6 s before it is hit), as does one at another time or one the
+    accident's execution did not have: those stay."""
+    if outcome.collided or not outcome.emergency:
+        return outcome
+
+    def prior(t: float | None, t0: float | None) -> bool:
+        return t is not None and t0 is not None and t0 < before_s and abs(t - t0) <= tolerance_s
+
+    hard = outcome.hard_brake and not prior(outcome.hard_brake_time_s, original.hard_brake_time_s)
+    estop = outcome.estop and not prior(outcome.estop_time_s, original.estop_time_s)
+    if hard == outcome.hard_brake and estop == outcome.estop:
+        return outcome
+    return replace(outcome, hard_brake=hard, estop=estop,
+                   hard_brake_time_s=outcome.hard_brake_time_s if hard else None,
+                   estop_time_s=outcome.estop_time_s if estop else None,
+                   emergency=hard or estop or outcome.unexpected_stop)
+
+
+def reference_violation(r: VariantResult, needed_m: float, original: Outcome | None = None,
+                        before_s: float = 0.0, dt_s: float = 0.05) -> float:
     """The physical search's constraint (<= 0: a usable reference): the accident's
-    (:func:`~rocas.pipeline.evaluate.violation`), and for an accident-free world in which the
-    ego drives less than ``needed_m`` over the whole run, a value in (0.5, 1] graded by how
-    far short it stops (below any accident's, which is above 1)."""
-    v = violation(r.outcome)
+    (:func:`~rocas.pipeline.evaluate.violation`; given ``original``, the outcome of the
+    accident's execution, the emergencies it shares with it before ``before_s`` [s] do not
+    count, :func:`without_prior_emergencies`, to within half a tick ``dt_s`` [s]), and for an
+    accident-free world in which the ego drives less than ``needed_m`` over the whole run, a
+    value in (0.5, 1] graded by how far short it stops (below any accident's, which is above 1)."""
+    outcome = r.outcome if original is None else without_prior_emergencies(
+        r.outcome, original, before_s, 0.5 * dt_s)
+    v = violation(outcome)
     if v > 0 or needed_m <= 0:
         return v
     travel = path_length_m(r.ego_xy)
@@ -163,6 +198,7 @@ def phase_physical(run: Run) -> dict[str, Any]:
     upto = tick + 1
     partner = actor_ids.index(run.accident.other) if run.accident.other in actor_ids else None
     needed_m = path_length_m(orig.ego_xy[:upto]) - PROGRESS_TOLERANCE_M
+    prior_before_s = run.accident.time_s - run.cfg.delta_s
 
     def objectives(m: Mutation, r: VariantResult) -> tuple[tuple[float, ...], float]:
         ents = mutated_entities(space, m)
@@ -172,7 +208,8 @@ def phase_physical(run: Run) -> dict[str, Any]:
         f4 = -shared_prefix_s(orig, r, scn.dt_s, upto)
         f5 = 0.0 if partner is None or encounter_kept(orig.actors_xy[:upto, partner],
                                                       r.actors_xy[:upto, partner]) else 1.0
-        return (f1, f2, space.distance(m), f4, f5), reference_violation(r, needed_m)
+        return (f1, f2, space.distance(m), f4, f5), reference_violation(
+            r, needed_m, orig.outcome, prior_before_s, scn.dt_s)
 
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         tasks = [VariantTask(apply_physical(scn, m), (), scn.seed) for m in ms]
@@ -201,10 +238,12 @@ def phase_physical(run: Run) -> dict[str, Any]:
         generations += res.generations
     result["search"] = "screening" if len(candidates) == len(screened) else "genetic"
     feasible = [c for c in candidates if c.feasible]
-    chosen = choose_reference(feasible, space)
+    shares = avoidance_shares(screened)
+    chosen = choose_reference(feasible, space, shares)
     result |= {"generations": [gen_json(g, "f2") for g in generations],
                "evaluations": len(candidates), "feasible": len(feasible),
-               "front": [cand_json(c) for c in _ranked(feasible, space)[:20]]}
+               "front": [cand_json(c) for c in _ranked(feasible, space, shares)[:20]],
+               "avoidance_shares": {n: round(v, 3) for n, v in shares.items() if v > 0}}
     evaluations = len(candidates)
     if chosen is not None:
         # shrink the reference towards the original: drop properties the avoidance does not
@@ -324,16 +363,41 @@ def _klass(c: Candidate, space: MutationSpace) -> tuple[int, int, int, int]:
             int(-c.objectives[3] < EARLY_S) if len(c.objectives) > 3 else 0)
 
 
-def _ranked(feasible: Sequence[Candidate], space: MutationSpace) -> list[Candidate]:
+def avoidance_shares(screened: Sequence[Candidate]) -> dict[str, float]:
+    """For each property the screening mutated, the estimated share (in (0, 1)) of its
+    values that avoid the accident, from its screened values: ``(k + 1) / (n + 2)`` when
+    ``k`` of its ``n`` screened single-property candidates in ``screened`` avoid it (others
+    are ignored). This is Laplace's rule of succession (the mean under a uniform prior): a
+    property screened at one value (a bool) that avoids it counts as 2/3, not as certain, so
+    it does not outrank one that avoids it at 3 of 4 values (also 2/3), while 9 colours of 9
+    (10/11) outrank 7 of 9 (8/11)."""
+    tried: dict[str, list[bool]] = {}
+    for c in screened:
+        if len(c.mutation.values) == 1:
+            tried.setdefault(c.mutation.names[0], []).append(c.feasible)
+    return {name: (sum(ok) + 1) / (len(ok) + 2) for name, ok in tried.items()}
+
+
+def robustness(c: Candidate, shares: Mapping[str, float]) -> float:
+    """How robustly a reference's change avoids the accident: the smallest estimated
+    avoidance share (:func:`avoidance_shares`) among the properties it changes (the prior
+    1/2 for one not screened)."""
+    return min((shares.get(n, 0.5) for n in c.mutation.values), default=0.5)
+
+
+def _ranked(feasible: Sequence[Candidate], space: MutationSpace,
+            shares: Mapping[str, float] | None = None) -> list[Candidate]:
     """Accident-free candidates in the order of :func:`choose_reference`."""
     if not feasible:
         return []
+    shares = shares or {}
     classes = {id(c): _klass(c, space) for c in feasible}
     out: list[Candidate] = []
     for k in sorted(set(classes.values())):
         group = [c for c in feasible if classes[id(c)] == k]
         limit = f2_tolerance(min(c.objectives[1] for c in group))
-        out += sorted(group, key=lambda c: (c.objectives[1] > limit, c.objectives[0], c.objectives[2],
+        out += sorted(group, key=lambda c: (c.objectives[1] > limit, -robustness(c, shares),
+                                            c.objectives[0], c.objectives[2],
                                             _removals(c.mutation), c.objectives[1], c.mutation.names,
                                             _values(c.mutation)))
     return out
@@ -343,7 +407,8 @@ def _values(m: Mutation) -> tuple[str, ...]:
     return tuple(str(m.values[n]) for n in m.names)
 
 
-def choose_reference(feasible: Sequence[Candidate], space: MutationSpace) -> Candidate | None:
+def choose_reference(feasible: Sequence[Candidate], space: MutationSpace,
+                     shares: Mapping[str, float] | None = None) -> Candidate | None:
     """The documented rule over the accident-free candidates (None when there are none):
 
     1. an entity change over a weather change (fog or rain changes every channel at once, so
@@ -356,13 +421,18 @@ def choose_reference(feasible: Sequence[Candidate], space: MutationSpace) -> Can
        reacts at once) makes planning and control differ from their first messages;
     5. then the executions most similar to the original (f2 within F2_TOLERANCE_M2 or
        F2_TOLERANCE_REL of the best, whichever is larger; see f2_tolerance);
-    6. then the most suspicious (f1: close to and in front of the ego);
-    7. then the smallest change (f3);
-    8. then changing a property over removing an entity (``enabled`` -> off);
-    9. then f2, the names and the values, so that the choice never depends on the order in
-       which candidates were found.
+    6. then the most robust change (:func:`robustness` over ``shares``, the screening's
+       :func:`avoidance_shares`): a property most of whose screened values avoid the accident
+       is one the accident depends on (A9: every other colour of the red truck avoids it); one
+       that avoids it at one value of four has hit an accident-free pocket (a cone moved 3 m
+       that happens to shift the ego's line), whose diff shows how the pocket was reached;
+    7. then the most suspicious (f1: close to and in front of the ego);
+    8. then the smallest change (f3);
+    9. then changing a property over removing an entity (``enabled`` -> off);
+    10. then f2, the names and the values, so that the choice never depends on the order in
+        which candidates were found.
     """
-    ranked = _ranked(feasible, space)
+    ranked = _ranked(feasible, space, shares)
     return ranked[0] if ranked else None
 
 

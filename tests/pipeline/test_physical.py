@@ -108,3 +108,34 @@ def test_a1_keeps_the_encounter_and_the_shrink_does_not_change_the_diffs_answer(
     assert any("prediction" not in c["departed"] for c in checked[1:])
     assert report["deviating_module"] == "prediction"
     assert not list((tmp_path / "run").glob("shrink_*.mcap"))
+
+
+def test_an_emergency_the_accident_had_long_before_it_does_not_count_against_a_reference():
+    """A7 laid out with the ego stopping close behind a long truck: its control raises an estop
+    at 0.25 s in every world, and the car behind hits it at 7.35 s. A world in which the car
+    behind stops short has the same estop at 0.25 s and no collision: a reference. An estop at
+    another time, one the accident did not have, or one within Algorithm 1's window before
+    the accident (part of it) still counts."""
+    from rocas.pipeline.physical_phase import reference_violation, without_prior_emergencies
+    from rocas.sim.oracles import Outcome
+
+    fields = {f.name: None for f in dataclasses.fields(Outcome)}
+    base = fields | {"collided": False, "hard_brake": False, "unexpected_stop": False,
+                     "max_decel_mps2": 0.8, "min_separation_m": 4.0}
+    accident = Outcome(**(base | {"collided": True, "collision_time_s": 7.35, "estop": True,
+                                  "estop_time_s": 0.25, "emergency": True,
+                                  "min_separation_m": -2.2}))
+    stopped_short = Outcome(**(base | {"estop": True, "estop_time_s": 0.25, "emergency": True}))
+    drives = np.stack([np.linspace(0.0, 20.0, 21), np.zeros(21)], axis=1)
+    ref = VariantResult(stopped_short, drives, np.zeros((21, 0, 2)))
+    assert reference_violation(ref, 10.0) >= 1.0  # without the accident's outcome: an emergency
+    assert reference_violation(ref, 10.0, accident, 7.35 - 3.0, 0.05) <= 0
+    cleared = without_prior_emergencies(stopped_short, accident, 4.35, 0.025)
+    assert not cleared.emergency and not cleared.estop and cleared.estop_time_s is None
+    other_time = dataclasses.replace(stopped_short, estop_time_s=3.0)
+    assert without_prior_emergencies(other_time, accident, 4.35, 0.025).emergency
+    assert without_prior_emergencies(stopped_short, accident, 0.2, 0.025).emergency  # in the window
+    hard = dataclasses.replace(stopped_short, hard_brake=True, hard_brake_time_s=0.25)
+    assert without_prior_emergencies(hard, accident, 4.35, 0.025).hard_brake  # the accident had none
+    crash = VariantResult(accident, drives, np.zeros((21, 0, 2)))
+    assert reference_violation(crash, 10.0, accident, 4.35, 0.05) > 1.0

@@ -11,6 +11,7 @@ from rocas.pipeline.physical import physical_space
 from rocas.pipeline.physical_phase import (
     F2_TOLERANCE_M2,
     arc_positions,
+    avoidance_shares,
     choose_reference,
     encounter_kept,
     f2_tolerance,
@@ -110,3 +111,44 @@ def test_positions_along_a_path_extend_past_both_ends():
     path = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])
     s = arc_positions(path, np.array([[-2.0, 1.0], [5.0, -3.0], [11.0, 4.0], [10.0, 13.0]]))
     assert s == pytest.approx([-2.0, 5.0, 14.0, 23.0])
+
+
+def _screened(name, values, avoided):
+    """Screened single-property candidates of ``name``: the first ``avoided`` values avoid
+    the accident, the rest do not."""
+    return [Candidate(Mutation({name: v}), (-1.0, 0.0, 2.0, -5.0, 0.0), -0.5 if k < avoided else 1.5, 0)
+            for k, v in enumerate(values)]
+
+
+def test_the_property_whose_changes_avoid_the_accident_more_often_wins():
+    """A9 laid out otherwise: the cone at the entry moved 3 m avoids the accident at one of its
+    four screened x values, every other colour of the red truck avoids it; the cone is closer
+    to the ego (more suspicious), but the truck's colour is what the accident depends on."""
+    space = physical_space(entry("A9").scenario)
+    colours = ["black", "blue", "brown", "gray", "green", "orange", "silver", "white", "yellow"]
+    truck = _screened("actor.red_truck.color", colours, 9)
+    ring = _screened("actor.ring_car.color", colours, 7)
+    cone = _screened("object.cone_entry.x", [1.0, 2.0, 3.0, 4.0], 1)
+    cone[0] = Candidate(cone[0].mutation, (-3.0, 0.0, 1.5, -7.0, 0.0), -0.3, 0)
+    screened = truck + ring + cone
+    shares = avoidance_shares(screened)
+    assert shares["actor.red_truck.color"] == pytest.approx(10 / 11)
+    assert shares["actor.ring_car.color"] == pytest.approx(8 / 11)
+    assert shares["object.cone_entry.x"] == pytest.approx(2 / 6)
+    feasible = [c for c in screened if c.feasible]
+    assert choose_reference(feasible, space) is cone[0]  # without the shares: the most suspicious
+    chosen = choose_reference(feasible, space, shares)
+    assert chosen.mutation.names == ("actor.red_truck.color",)
+
+
+def test_a_bool_screened_once_does_not_outrank_a_property_that_avoids_it_at_most_values():
+    """A bool has one screened value: avoiding the accident there is 2/3 by the rule of
+    succession, as is 3 of 4 light policies, so the rule's later steps (a property change over
+    removing the light) decide, as they did without the shares."""
+    space = physical_space(entry("A10").scenario)
+    policy = _screened("light.tl_skew.policy", ["fixed_green", "fixed_yellow", "off", "fixed_red"], 3)
+    off = _screened("light.tl_skew.enabled", [False], 1)
+    shares = avoidance_shares(policy + off)
+    assert shares["light.tl_skew.enabled"] == shares["light.tl_skew.policy"]
+    chosen = choose_reference([c for c in policy + off if c.feasible], space, shares)
+    assert chosen.mutation.names == ("light.tl_skew.policy",)
