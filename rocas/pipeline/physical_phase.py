@@ -370,19 +370,21 @@ def avoidance_shares(screened: Sequence[Candidate]) -> dict[str, float]:
     are ignored). This is Laplace's rule of succession (the mean under a uniform prior): a
     property screened at one value (a bool) that avoids it counts as 2/3, not as certain, so
     it does not outrank one that avoids it at 3 of 4 values (also 2/3), while 9 colours of 9
-    (10/11) outrank 7 of 9 (8/11)."""
+    (10/11) outrank 7 of 9 (8/11). A property none of whose screened values avoids it gets 0:
+    it avoids the accident only together with others (the genetic search's candidates), and
+    the estimate would rank those by how many values each kind of property was screened at."""
     tried: dict[str, list[bool]] = {}
     for c in screened:
         if len(c.mutation.values) == 1:
             tried.setdefault(c.mutation.names[0], []).append(c.feasible)
-    return {name: (sum(ok) + 1) / (len(ok) + 2) for name, ok in tried.items()}
+    return {name: (sum(ok) + 1) / (len(ok) + 2) if any(ok) else 0.0 for name, ok in tried.items()}
 
 
 def robustness(c: Candidate, shares: Mapping[str, float]) -> float:
     """How robustly a reference's change avoids the accident: the smallest estimated
-    avoidance share (:func:`avoidance_shares`) among the properties it changes (the prior
-    1/2 for one not screened)."""
-    return min((shares.get(n, 0.5) for n in c.mutation.values), default=0.5)
+    avoidance share (:func:`avoidance_shares`) among the properties it changes (0 for one not
+    screened)."""
+    return min((shares.get(n, 0.0) for n in c.mutation.values), default=0.0)
 
 
 def _ranked(feasible: Sequence[Candidate], space: MutationSpace,

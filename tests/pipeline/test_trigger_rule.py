@@ -152,3 +152,13 @@ def test_a_bool_screened_once_does_not_outrank_a_property_that_avoids_it_at_most
     assert shares["light.tl_skew.enabled"] == shares["light.tl_skew.policy"]
     chosen = choose_reference([c for c in policy + off if c.feasible], space, shares)
     assert chosen.mutation.names == ("light.tl_skew.policy",)
+
+
+def test_properties_that_avoid_the_accident_only_in_combination_are_not_ranked_by_their_kind():
+    """No screened value of either property avoids the accident: the genetic search's
+    combinations are not told apart by how many values a bool (1) or a colour (9) was
+    screened at, so the rule's later steps decide as they would without the shares."""
+    screened = _screened("actor.red_truck.color", ["black", "blue"], 0)
+    screened += _screened("area.island.enabled", [False], 0)
+    shares = avoidance_shares(screened)
+    assert shares == {"actor.red_truck.color": 0.0, "area.island.enabled": 0.0}
