@@ -14,8 +14,10 @@ entities, f2 dissimilarity of the *other* actors' trajectories up to the acciden
 paper's definition: the ego is not one of them), f3 size of the change, and f4 = minus the
 shared prefix [s]: how long the ego drives in the reference exactly as in the accident, and f5
 = 1 when the reference takes the accident's other party away from the encounter (it never gets
-to where it met the ego, :func:`encounter_kept`), else 0. The constraint: no accident, and the
-ego gets as far as it had at the accident (:func:`reference_violation`).
+to where it met the ego, :func:`encounter_kept`), else 0. The constraint: no accident (an
+emergency the accident's execution had at the same tick, before Algorithm 1's window, is not
+one: :func:`without_prior_emergencies`), and the ego gets as far as it had at the accident
+(:func:`reference_violation`).
 """
 
 from __future__ import annotations
