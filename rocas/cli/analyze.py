@@ -37,6 +37,35 @@ def add_search_arguments(p: argparse.ArgumentParser,
                    help="skip module substitution, the deviating module's second opinion")
 
 
+def add_executor_arguments(p: argparse.ArgumentParser) -> None:
+    """--executor and --address (the Ray cluster), shared with ``rocas triage``."""
+    from rocas.search.executor import executor_names
+
+    p.add_argument("--executor", default="local",
+                   help=f"where simulations run: {', '.join(executor_names())} (default local)")
+    p.add_argument("--address", metavar="ADDR", default=None,
+                   help="with --executor ray: the cluster to join (default: RAY_ADDRESS, or a "
+                        "local Ray)")
+
+
+def executor_from_arguments(args: argparse.Namespace) -> Any:
+    """The executor --executor/--address name when it is not the plain one of
+    ``AnalyzeConfig.executor`` (a Ray cluster at an address), else None.
+
+    Raises:
+        UsageError: --address without --executor ray.
+    """
+    if args.address is None:
+        return None
+    if args.executor != "ray":
+        from rocas.errors import UsageError
+
+        raise UsageError("--address is for --executor ray", "add --executor ray, or drop --address")
+    from rocas.search.ray_executor import RayExecutor
+
+    return RayExecutor(args.workers, address=args.address)
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", metavar="ACCIDENT.mcap",
                    help="accident recording (or a scenario file / example name with --scenario)")
@@ -50,10 +79,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
     p.add_argument("--scope", choices=("module", "all"), default="module",
                    help="cyber search over the deviating module (default) or every parameter")
-    from rocas.search.executor import executor_names
-
-    p.add_argument("--executor", default="local",
-                   help=f"where simulations run: {', '.join(executor_names())} (default local)")
+    add_executor_arguments(p)
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -96,14 +122,19 @@ def run(args: argparse.Namespace, env: Env) -> int:
     if args.rrd:
         check_writable(args.rrd)  # before minutes of work, not after
     progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})
+    executor = executor_from_arguments(args)
     try:
         with progress:
-            report = analyze(source, out, cfg, resume=args.resume, progress=progress)
+            report = analyze(source, out, cfg, resume=args.resume, progress=progress,
+                             executor=executor)
         if args.rrd:
             _write_rrd(args.rrd, out, report)
     except KeyboardInterrupt as exc:
         exc.kept = kept_after_interrupt(out, args.rrd)  # type: ignore[attr-defined]
         raise
+    finally:
+        if executor is not None:
+            executor.close()
     if args.json:
         env.stdout.write(json.dumps(report, indent=2) + "\n")
     else:

@@ -10,6 +10,9 @@
   type and family (rotated, mirrored, other speeds, actors, starts, or all mixed; see
   rocas.scenarios.variants), checked the same way, written as catalog-format files with their
   ground truth (and, with ``--record``, their accident recordings beside them).
+- ``generate --family F --family G ... --per-type --instances K``: K variants per type in all:
+  the families are tried in the order given, each topping up what the ones before kept (the
+  campaign of ``rocas triage``: ``--family mixed --family rotate --per-type --instances 10``).
 
 ``--stack NAME`` works on another stack's catalog (``--stack lav``: L1-L6, recorded into
 ``recordings/lav/``); ``--family`` is the built-in catalog's only.
@@ -59,6 +62,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     gen.add_argument("--record", action="store_true",
                      help="with --family and -o: also write each kept variant's accident "
                           "recording (DIR/<name>.mcap)")
+    gen.add_argument("--per-type", action="store_true",
+                     help="with --family: K variants per type in all, not per family; the "
+                          "families are tried in the order given, each topping up what the ones "
+                          "before kept")
     gen.add_argument("--json", action="store_true", help="print the counts as JSON")
 
 
@@ -142,6 +149,8 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
         raise UsageError("--instances must be >= 1")
     if args.record and not (args.family and args.output):
         raise UsageError("--record needs --family and -o DIR (where the recordings go)")
+    if args.per_type and not args.family:
+        raise UsageError("--per-type needs --family (the families that make up each type's K)")
     if args.family:
         if args.stack != "ads":
             raise UsageError("--family generates variants of the built-in catalog only",
@@ -183,10 +192,16 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
     out_dir = Path(args.output) if args.output else None
     rows = []
     written: list[str] = []
+    short: list[str] = []  # --per-type: the types the families could not make K of
     try:
         for e in _selected(args.only):
+            wanted = args.instances
             for family in families:
-                rep = generate_variants(e, family, args.instances, seed=args.seed)
+                if wanted == 0:
+                    break  # --per-type: the families before made this type's K
+                rep = generate_variants(e, family, wanted, seed=args.seed)
+                if args.per_type:
+                    wanted -= len(rep.variants)
                 rows.append({"id": e.id, "key": e.key, "family": family, "tried": rep.tried,
                              "invalid": rep.invalid, "crashed": rep.crashed,
                              "fix_holds": rep.fix_holds, "kept": len(rep.variants),
@@ -205,11 +220,17 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
                     invalid = f" ({rep.invalid} not valid scenarios)" if rep.invalid else ""
                     print(f"{e.id} {family}: {rep.crashed}/{rep.tried} tried variants crash"
                           f"{invalid}{fixed}; kept {len(rep.variants)}", file=env.stdout)
+            if args.per_type and wanted > 0:
+                short.append(f"{e.id} ({args.instances - wanted} of {args.instances})")
     except KeyboardInterrupt as exc:
         exc.kept = _kept(written, out_dir, "variant file")  # type: ignore[attr-defined]
         raise
     if args.json:
         print(json.dumps(rows, indent=2), file=env.stdout)
+    if short:
+        env.err().print(f"warning: fewer than {args.instances} variants kept for {', '.join(short)} "
+                        "(add another --family to top them up)",
+                        soft_wrap=True)
     return 0
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import check_parent_exists
-from rocas.cli.analyze import add_search_arguments
+from rocas.cli.analyze import add_executor_arguments, add_search_arguments
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
@@ -31,13 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
             action.help = ("perturbed variants in each accident's regression test (default "
                            f"{TRIAGE_VALIDATION}: the robust value is not needed to group)")
     p.add_argument("--population", type=int, default=24, help="individuals per generation (default 24)")
-    from rocas.search.executor import executor_names
-
-    p.add_argument("--executor", default="local",
-                   help=f"where simulations run: {', '.join(executor_names())} (default local)")
-    p.add_argument("--address", metavar="ADDR", default=None,
-                   help="with --executor ray: the cluster to join (default: RAY_ADDRESS, or a "
-                        "local Ray)")
+    add_executor_arguments(p)
     p.add_argument("--resume", action="store_true", help="continue the campaign in --out")
     p.add_argument("--json", action="store_true", help="print campaign.json instead of the tables")
 

@@ -2,7 +2,8 @@
 
 One HTTP server on localhost serves, all from one origin:
 
-- ``/``, ``/app.js``, ``/style.css``: the static page of the repository's ``viewer/`` folder;
+- ``/``, ``/app.js``, ``/style.css``: the static page of the repository's ``viewer/`` folder
+  (:func:`viewer_dir`);
 - ``/campaign.json``: the campaign's groups and accidents (``rocas triage``'s file);
 - ``/rrd/<accident>.rrd``: the accident's analysis as a Rerun recording, written on its first
   request into ``CAMPAIGN_DIR/rrd/`` (:func:`rocas.viz.analysis.write_run_dir_rrd`) and kept;
@@ -36,14 +37,15 @@ _WEB_FONTS = re.compile(rb"<link[^>]*fonts\.(?:googleapis|gstatic)\.com[^>]*>", 
 
 
 def viewer_dir() -> Path:
-    """The repository's ``viewer/`` folder (beside the ``rocas`` package of a source checkout
-    or an editable install)."""
-    import rocas
+    """The browser view's page: the repository's ``viewer/`` folder, which the package reaches
+    as ``rocas/viz/page`` (a link to it in a checkout or an editable install; the files
+    themselves in a wheel or an sdist)."""
+    from importlib import resources
 
-    d = Path(rocas.__file__).resolve().parents[1] / "viewer"
+    d = Path(str(resources.files("rocas.viz") / "page"))
     if not (d / "index.html").is_file():
         raise RocasError(f"the browser view's page is not found (looked in {d})",
-                         "run rocas from a source checkout or an editable install (pip install -e .)")
+                         "reinstall rocas: its wheel carries the page as rocas/viz/page")
     return d
 
 

@@ -252,3 +252,26 @@ def test_the_answer_is_said_before_the_validation_checks_it():
         p("answer", {"module": "perception", "fix": "perception.brake_threshold 0.8 -> 0.8564"})
         assert "found: perception misconfigured, perception.brake_threshold 0.8 -> 0.8564" in err.getvalue()
         assert [t.description for t in p._p.tasks] == ["cyber"]  # not a phase with a bar of its own
+
+
+def test_analyze_joins_the_ray_cluster_at_address(rocas, monkeypatch, tmp_path):
+    """--address reaches the Ray executor the analysis runs on (a stand-in records it), and
+    without --executor ray it is a usage error."""
+    import rocas.search.ray_executor as ray_executor
+    from rocas.errors import RocasError
+
+    joined = []
+
+    class Unreachable:
+        def __init__(self, workers=None, address=None):
+            joined.append((workers, address))
+            raise RocasError(f"cannot start or join {address}: stand-in")
+
+    monkeypatch.setattr(ray_executor, "RayExecutor", Unreachable)
+    r = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "r",
+              "--executor", "ray", "--address", "head.example:6379", "--workers", "3")
+    assert r.code != 0 and "cannot start or join head.example:6379" in r.stderr
+    assert joined == [(3, "head.example:6379")]
+    r = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "r",
+              "--address", "head.example:6379")
+    assert r.code == 2 and "--address is for --executor ray" in r.stderr
