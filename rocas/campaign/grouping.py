@@ -24,13 +24,17 @@ Scores against the documented answers (each accident's catalog type, where known
 - completeness: per type, the share of its accidents in its largest group (overall: accidents
   in their type's largest group over accidents with a known type);
 - purity: per group, the share of its accidents of its most common type (overall: weighted by
-  group size).
+  group size);
+- documented: whether a group's root cause is the documented one of its most common type
+  (:func:`documented_keys`: the module, and for a fixable type a documented fix's parameter
+  moved the way that fix moves it), counted over groups, and over accidents whose group's root
+  cause is their own type's documented one. Purity counts types; this counts right answers.
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 VERDICTS_BY_CAUSE = ("misconfiguration", "no_configuration_fix")
@@ -62,24 +66,62 @@ def trigger_kind(report: dict[str, Any]) -> str:
     return f"{trig.get('kind') or 'unknown'} {', '.join(props) or 'unknown'}"
 
 
+def _named_fixes(report: dict[str, Any]) -> list[tuple[str, Sequence[dict[str, Any]]]]:
+    """A misconfiguration's names (see :func:`root_cause_keys`), each with its changes."""
+    module = report.get("deviating_module")
+    chosen = report["misconfiguration"]
+    named = [(fix_key(module, chosen), chosen)]
+    for alt in report.get("alternatives") or []:
+        mis = alt.get("misconfiguration") or []
+        if mis and _directions(mis) == _directions(chosen):
+            key = fix_key(module, mis)
+            if key not in [k for k, _ in named]:
+                named.append((key, mis))
+    return named
+
+
 def root_cause_keys(report: dict[str, Any]) -> list[str]:
     """The report's root cause, then the other names of the same root cause (nearly-as-small
     fixes moving their parameters the same way); see the module docstring."""
     verdict = report["verdict"]
     module = report.get("deviating_module")
     if verdict == "misconfiguration" and report.get("misconfiguration"):
-        chosen = report["misconfiguration"]
-        keys = [fix_key(module, chosen)]
-        for alt in report.get("alternatives") or []:
-            mis = alt.get("misconfiguration") or []
-            if mis and _directions(mis) == _directions(chosen):
-                key = fix_key(module, mis)
-                if key not in keys:
-                    keys.append(key)
-        return keys
+        return [k for k, _ in _named_fixes(report)]
     if verdict == "no_configuration_fix":
         return [f"{module}: no configuration fix; trigger {trigger_kind(report)}"]
     return [verdict.replace("_", " ")]
+
+
+def _moves_a_fix_its_way(changes: Sequence[dict[str, Any]], fixes: Sequence[Mapping[str, float]]) -> bool:
+    """Whether some change moves a documented fix's parameter the way that fix moves it from
+    the same original value (as ``rocas bench`` scores a parameter)."""
+    for ch in changes:
+        try:
+            original, delta = float(ch["original"]), float(ch["mutated"]) - float(ch["original"])
+        except (TypeError, ValueError):
+            continue
+        if any(ch["parameter"] in f and delta * (float(f[ch["parameter"]]) - original) > 0 for f in fixes):
+            return True
+    return False
+
+
+def documented_keys(report: dict[str, Any], module: str, fixes: Sequence[Mapping[str, float]]) -> list[str]:
+    """The names among :func:`root_cause_keys` that are the documented root cause: the
+    documented module, and for a fixable type (``fixes`` not empty) a documented fix's
+    parameter moved that fix's way; for an unfixable one the verdict ``no_configuration_fix``.
+
+    Args:
+        report: the analysis's report.
+        module: the documented responsible module.
+        fixes: every documented fix (``GroundTruth.fixes``; empty when none exists).
+    """
+    if report.get("deviating_module") != module:
+        return []
+    if not fixes:
+        return root_cause_keys(report) if report["verdict"] == "no_configuration_fix" else []
+    if report["verdict"] != "misconfiguration" or not report.get("misconfiguration"):
+        return []
+    return [k for k, mis in _named_fixes(report) if _moves_a_fix_its_way(mis, fixes)]
 
 
 def group_accidents(names: Sequence[str], keys: dict[str, list[str]]) -> list[dict[str, Any]]:
@@ -107,13 +149,16 @@ def group_accidents(names: Sequence[str], keys: dict[str, list[str]]) -> list[di
     return groups
 
 
-def scores(groups: Sequence[dict[str, Any]], truth: dict[str, str | None]) -> dict[str, Any] | None:
-    """Completeness and purity against the documented types (see the module docstring);
-    None when no grouped accident has a known type.
+def scores(groups: Sequence[dict[str, Any]], truth: dict[str, str | None],
+           documented: dict[str, list[str]] | None = None) -> dict[str, Any] | None:
+    """Completeness, purity and documented root causes against the documented types (see the
+    module docstring); None when no grouped accident has a known type.
 
     Args:
         groups: as :func:`group_accidents` returns them.
         truth: per accident, its documented type or None.
+        documented: per accident, its :func:`documented_keys` (missing: none known); without
+            it the documented figures are left out.
     """
     known = [(g["root_cause"], n, truth[n]) for g in groups for n in g["accidents"] if truth.get(n)]
     if not known:
@@ -133,12 +178,22 @@ def scores(groups: Sequence[dict[str, Any]], truth: dict[str, str | None]) -> di
                 "types": dict(sorted(c.items(), key=lambda kv: _type_order(kv[0])))}
             for g, c in per_group.items()}
     n = len(known)
-    return {"accidents_with_truth": n,
-            "completeness": sum(t["in_largest"] for t in types.values()) / n,
-            "purity": sum(g["of_main_type"] for g in grps.values()) / n,
-            "worst_completeness": min(t["completeness"] for t in types.values()),
-            "worst_purity": min(g["purity"] for g in grps.values()),
-            "types": types, "groups": grps}
+    out = {"accidents_with_truth": n,
+           "completeness": sum(t["in_largest"] for t in types.values()) / n,
+           "purity": sum(g["of_main_type"] for g in grps.values()) / n,
+           "worst_completeness": min(t["completeness"] for t in types.values()),
+           "worst_purity": min(g["purity"] for g in grps.values()),
+           "types": types, "groups": grps}
+    if documented is not None:
+        # a key's being documented depends on the type alone: any accident of the main type says
+        for key, g in grps.items():
+            g["documented"] = any(key in documented.get(name, []) for cause, name, t in known
+                                  if cause == key and t == g["main_type"])
+        right = sum(cause in documented.get(name, []) for cause, name, _ in known)
+        out.update(groups_documented=sum(g["documented"] for g in grps.values()),
+                   groups_with_truth=len(grps), accidents_documented=right,
+                   documented_share=right / n)
+    return out
 
 
 def _type_order(t: str) -> tuple[int, str]:

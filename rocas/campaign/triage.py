@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import write_text_atomic
-from rocas.campaign.grouping import group_accidents, root_cause_keys, scores
+from rocas.campaign.grouping import documented_keys, group_accidents, root_cause_keys, scores
 from rocas.campaign.inputs import CampaignInput
 from rocas.errors import RocasError, UsageError
 from rocas.pipeline.config import REPORT_SETTINGS, AnalyzeConfig
@@ -125,10 +125,26 @@ def _analyse_one(item: CampaignInput, out: Path, cfg: AnalyzeConfig, ex: Executo
                                  for m in report.get("misconfiguration", [])],
             "triggering_entity": report.get("triggering_entity"),
             "root_causes": root_cause_keys(report),
+            "documented_root_causes": _documented(item, report),
             "confidence": {"level": conf.get("level"), "same": agreement.get("same"),
                            "runs": agreement.get("runs"), "note": conf.get("note")} if conf else None,
             "complete": report.get("complete", True),
             "seconds": round(sum(report.get("timings_s", {}).values()), 2)}
+
+
+def _documented(item: CampaignInput, report: dict[str, Any]) -> list[str] | None:
+    """The accident's root cause names that are its type's documented root cause
+    (:func:`documented_keys`), or None when its type is not a catalog type (the documented
+    module and fixes are the catalog entry's; a variant keeps its entry's)."""
+    if item.truth_type is None:
+        return None
+    from rocas.scenarios.catalog import entry
+
+    try:
+        truth = entry(item.truth_type).truth
+    except UsageError:
+        return None
+    return documented_keys(report, truth.module, truth.fixes)
 
 
 def build_campaign(rows: Sequence[dict[str, Any]], settings: dict[str, Any]) -> dict[str, Any]:
@@ -149,7 +165,12 @@ def build_campaign(rows: Sequence[dict[str, Any]], settings: dict[str, Any]) -> 
                        "types": dict(Counter(m["truth_type"] or "unknown" for m in members))})
     group_of = {n: g["id"] for g in groups for n in g["accidents"]}
     accidents = [{**r, "group": group_of.get(r["name"])} for r in rows if "error" not in r]
-    sc = scores(groups, {r["name"]: r["truth_type"] for r in analysed})
+    documented = {r["name"]: r["documented_root_causes"] for r in analysed
+                  if r.get("documented_root_causes") is not None}
+    sc = scores(groups, {r["name"]: r["truth_type"] for r in analysed},
+                documented if documented else None)
+    for g in groups:
+        g["documented"] = ((sc or {}).get("groups", {}).get(g["root_cause"]) or {}).get("documented")
     return {"settings": settings, "accidents_total": len(rows), "analysed": len(analysed),
             "failed": failed, "complete": not failed,
             "groups": groups, "accidents": accidents, "scores": sc}
@@ -172,12 +193,13 @@ def markdown(c: dict[str, Any]) -> str:
              f"{len(c['groups'])} groups"
              + ("." if c["complete"] else f"; {len(c['failed'])} failed to analyse "
                 "(the groups are made from the others)."), ""]
-    lines += ["| group | root cause | accidents | agreement | documented types |",
-              "|---|---|---|---|---|"]
+    lines += ["| group | root cause | accidents | agreement | documented types | documented root cause |",
+              "|---|---|---|---|---|---|"]
     for g in c["groups"]:
         agree = ", ".join(f"{k} {v}" for k, v in g["agreement"].items())
         types = ", ".join(f"{k} {v}" for k, v in g["types"].items())
-        lines.append(f"| {g['id']} | {g['root_cause']} | {g['count']} | {agree} | {types} |")
+        doc = {True: "yes", False: "no"}.get(g.get("documented"), "")
+        lines.append(f"| {g['id']} | {g['root_cause']} | {g['count']} | {agree} | {types} | {doc} |")
     lines.append("")
     if c["failed"]:
         lines += ["## Failed to analyse", ""]
@@ -188,7 +210,12 @@ def markdown(c: dict[str, Any]) -> str:
         lines += ["## Against the documented answers", "",
                   f"Completeness {_pct(sc['completeness'])} (worst type {_pct(sc['worst_completeness'])}), "
                   f"purity {_pct(sc['purity'])} (worst group {_pct(sc['worst_purity'])}), over "
-                  f"{sc['accidents_with_truth']} accidents with a documented type.", "",
+                  f"{sc['accidents_with_truth']} accidents with a documented type."
+                  + (f" Root cause the documented one (module, parameter, direction): "
+                     f"{sc['groups_documented']} of {sc['groups_with_truth']} groups, "
+                     f"{sc['accidents_documented']} of {sc['accidents_with_truth']} accidents "
+                     f"({_pct(sc['documented_share'])})." if "groups_documented" in sc else ""),
+                  "",
                   "| type | accidents | in its largest group | groups |", "|---|---|---|---|"]
         for t, v in sc["types"].items():
             lines.append(f"| {t} | {v['accidents']} | {v['in_largest']} ({_pct(v['completeness'])}) "

@@ -115,6 +115,11 @@ def render(c: dict[str, Any], out: Path, env: Env) -> None:
                   f"{100 * sc['worst_completeness']:.1f} %), purity {100 * sc['purity']:.1f} % "
                   f"(worst group {100 * sc['worst_purity']:.1f} %) over {sc['accidents_with_truth']} "
                   "accidents with a documented type", soft_wrap=True)
+        if "groups_documented" in sc:
+            con.print(f"root cause the documented one (module, parameter, direction): "
+                      f"{sc['groups_documented']} of {sc['groups_with_truth']} groups, "
+                      f"{sc['accidents_documented']} of {sc['accidents_with_truth']} accidents "
+                      f"({100 * sc['documented_share']:.1f} %)", soft_wrap=True)
     else:
         con.print("completeness and purity: no accident has a documented type")
     con.print(f"campaign directory: {out} (campaign.json, campaign.md)", soft_wrap=True)

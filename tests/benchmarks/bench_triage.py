@@ -47,6 +47,11 @@ def main() -> None:
                       f"{100 * sc['worst_completeness']:.0f} %), purity {100 * sc['purity']:.1f} % "
                       f"(worst group {100 * sc['worst_purity']:.0f} %), {len(campaign['groups'])} groups",
                       flush=True)
+                if "groups_documented" in sc:
+                    print(f"{name:>5}: root cause the documented one (module, parameter, direction): "
+                          f"{sc['groups_documented']} of {sc['groups_with_truth']} groups, "
+                          f"{sc['accidents_documented']} of {sc['accidents_with_truth']} accidents "
+                          f"({100 * sc['documented_share']:.1f} %)", flush=True)
         r = rates[name]
         print(f"{name:>5}: {len(inputs)} accidents, min {min(r):.0f} / median "
               f"{statistics.median(r):.0f} accidents per hour ({args.workers} workers)", flush=True)
