@@ -10,9 +10,9 @@
   type and family (rotated, mirrored, other speeds, actors, starts, or all mixed; see
   rocas.scenarios.variants), checked the same way, written as catalog-format files with their
   ground truth (and, with ``--record``, their accident recordings beside them).
-- ``generate --family F --family G ... --per-type --instances K``: K variants per type in all:
-  the families are tried in the order given, each topping up what the ones before kept (the
-  campaign of ``rocas triage``: ``--family mixed --family rotate --per-type --instances 10``).
+- ``generate --family F --family G ... --per-type --instances K [--max-tries N]``: K variants
+  per type in all: the families are tried in the order given (at most N draws each), each
+  topping up what the ones before kept (the campaign of ``rocas triage``, docs/cli.md).
 
 ``--stack NAME`` works on another stack's catalog (``--stack lav``: L1-L6, recorded into
 ``recordings/lav/``); ``--family`` is the built-in catalog's only.
@@ -66,6 +66,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                      help="with --family: K variants per type in all, not per family; the "
                           "families are tried in the order given, each topping up what the ones "
                           "before kept")
+    gen.add_argument("--max-tries", type=int, default=None, metavar="N",
+                     help="with --family: draws tried per type and family at most (default 8 "
+                          "times the variants wanted)")
     gen.add_argument("--json", action="store_true", help="print the counts as JSON")
 
 
@@ -149,6 +152,8 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
         raise UsageError("--instances must be >= 1")
     if args.record and not (args.family and args.output):
         raise UsageError("--record needs --family and -o DIR (where the recordings go)")
+    if args.max_tries is not None and (args.max_tries < 1 or not args.family):
+        raise UsageError("--max-tries needs --family and a count >= 1")
     if args.per_type and not args.family:
         raise UsageError("--per-type needs --family (the families that make up each type's K)")
     if args.family:
@@ -199,7 +204,7 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
             for family in families:
                 if wanted == 0:
                     break  # --per-type: the families before made this type's K
-                rep = generate_variants(e, family, wanted, seed=args.seed)
+                rep = generate_variants(e, family, wanted, seed=args.seed, max_tries=args.max_tries)
                 if args.per_type:
                     wanted -= len(rep.variants)
                 rows.append({"id": e.id, "key": e.key, "family": family, "tried": rep.tried,

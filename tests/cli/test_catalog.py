@@ -94,7 +94,7 @@ def test_catalog_list_and_record_take_a_stack(tmp_path, capsys):
 
 def test_generate_per_type_tops_each_type_up_from_the_next_family(rocas, monkeypatch):
     """--per-type: K variants per type in all; a family is asked only for what the ones before
-    did not make, and a type still short of K is named on stderr."""
+    did not make (at most --max-tries draws), and a type still short of K is named on stderr."""
     from types import SimpleNamespace
 
     import rocas.scenarios.variants as variants
@@ -102,17 +102,18 @@ def test_generate_per_type_tops_each_type_up_from_the_next_family(rocas, monkeyp
     asked = []
     kept_by = {("A3", "mixed"): 1, ("A3", "rotate"): 1, ("A10", "mixed"): 3}
 
-    def fake(e, family, count, *, seed=0):
-        asked.append((e.id, family, count, seed))
+    def fake(e, family, count, *, seed=0, max_tries=None):
+        asked.append((e.id, family, count, seed, max_tries))
         n = min(count, kept_by.get((e.id, family), count))
         vs = [SimpleNamespace(name=f"{e.key}__{family}_k{i}", reference_avoids=True) for i in range(n)]
         return SimpleNamespace(tried=8, invalid=0, crashed=n, fix_holds=n, variants=vs)
 
     monkeypatch.setattr(variants, "generate_variants", fake)
     r = rocas("catalog", "generate", "--family", "mixed", "--family", "rotate", "--per-type",
-              "--instances", "3", "--only", "A3", "--only", "A10", "--seed", "5", "--json")
+              "--instances", "3", "--only", "A3", "--only", "A10", "--seed", "5", "--max-tries", "7",
+              "--json")
     assert r.code == 0, r.stderr
-    assert asked == [("A3", "mixed", 3, 5), ("A3", "rotate", 2, 5), ("A10", "mixed", 3, 5)]
+    assert asked == [("A3", "mixed", 3, 5, 7), ("A3", "rotate", 2, 5, 7), ("A10", "mixed", 3, 5, 7)]
     assert [(row["id"], row["family"], row["kept"]) for row in json.loads(r.stdout)] == \
         [("A3", "mixed", 1), ("A3", "rotate", 1), ("A10", "mixed", 3)]
     assert "fewer than 3 variants kept for A3 (2 of 3)" in r.stderr
@@ -120,6 +121,8 @@ def test_generate_per_type_tops_each_type_up_from_the_next_family(rocas, monkeyp
     asked.clear()
     r = rocas("catalog", "generate", "--family", "mixed", "--family", "rotate",
               "--instances", "3", "--only", "A10", "--json")
-    assert r.code == 0 and asked == [("A10", "mixed", 3, 0), ("A10", "rotate", 3, 0)]
+    assert r.code == 0 and asked == [("A10", "mixed", 3, 0, None), ("A10", "rotate", 3, 0, None)]
     r = rocas("catalog", "generate", "--per-type", "--instances", "3")
     assert r.code != 0 and "--per-type needs --family" in r.stderr
+    r = rocas("catalog", "generate", "--family", "mixed", "--instances", "3", "--max-tries", "0")
+    assert r.code != 0 and "--max-tries" in r.stderr
