@@ -10,7 +10,8 @@ Campaign directory::
 Each accident is analysed by :func:`rocas.pipeline.analyze.analyze` in its own run directory,
 so an interrupted campaign continues (``resume=True``) from the last finished phase, search
 generation or validation slice of the accident under way, and finished accidents are read back
-from their reports. One executor serves the whole campaign (a local pool or a Ray cluster is
+from their report.json (once their input and settings are checked to be the campaign's), not
+resumed. One executor serves the whole campaign (a local pool or a Ray cluster is
 started once). An accident whose analysis fails is listed with the error's one-line message,
 never dropped; the groups then say they were made from fewer accidents than the campaign's.
 """
@@ -108,9 +109,11 @@ def _analyse_one(item: CampaignInput, out: Path, cfg: AnalyzeConfig, ex: Executo
             from rocas.scenarios import resolve_scenario
 
             source = resolve_scenario(str(item.path))
-        report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists(),
-                         progress=lambda phase, info: progress(k, n, item.name, phase, info),
-                         executor=ex)
+        report = _finished_report(run_dir, source, cfg)
+        if report is None:
+            report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists(),
+                             progress=lambda phase, info: progress(k, n, item.name, phase, info),
+                             executor=ex)
     except RocasError as exc:
         return {**row, "error": str(exc).splitlines()[0]}
     except (KeyboardInterrupt, MemoryError):
@@ -130,6 +133,28 @@ def _analyse_one(item: CampaignInput, out: Path, cfg: AnalyzeConfig, ex: Executo
                            "runs": agreement.get("runs"), "note": conf.get("note")} if conf else None,
             "complete": report.get("complete", True),
             "seconds": round(sum(report.get("timings_s", {}).values()), 2)}
+
+
+def _finished_report(run_dir: Path, source: Any, cfg: AnalyzeConfig) -> dict[str, Any] | None:
+    """The report of a finished analysis of ``source`` with ``cfg`` in ``run_dir``, read from
+    its report.json (resuming it would re-simulate the accident and the references only to
+    rebuild the same report), or None when it has not finished.
+
+    Raises:
+        UsageError: ``run_dir`` holds the analysis of another input or with other settings.
+    """
+    from rocas.pipeline.rundir import prepare_run_dir, source_identity
+
+    path = run_dir / "report.json"
+    if not path.is_file():
+        return None
+    label, digest = source_identity(source)
+    prepare_run_dir(run_dir, True, label, cfg, digest)  # the same input and settings, or refused
+    try:
+        report = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None  # resuming says what is wrong with the run directory
+    return report if isinstance(report, dict) and "verdict" in report else None
 
 
 def _documented(item: CampaignInput, report: dict[str, Any]) -> list[str] | None:

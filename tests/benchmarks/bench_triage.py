@@ -2,6 +2,7 @@
 small campaign, and whether both give the same campaign.json groups.
 
     nice python tests/benchmarks/bench_triage.py CAMPAIGN_INPUTS... [--workers 2] [--budget 240]
+        [--executor local --executor ray]
 
 e.g. on the accidents ``rocas catalog generate --family mixed --instances 2 -o DIR`` writes.
 Each executor analyses the campaign from scratch in its own temporary directory (``--repeat``
@@ -27,11 +28,13 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=240)
     ap.add_argument("--validation", type=int, default=0)
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--executor", action="append", choices=("local", "ray"), default=[],
+                    help="the executors to measure (repeatable; default local and ray)")
     args = ap.parse_args()
     inputs = collect_inputs(args.inputs)
     rates: dict[str, list[float]] = {}
     groups = {}
-    for name in ("local", "ray"):
+    for name in args.executor or ["local", "ray"]:
         cfg = AnalyzeConfig(budget=args.budget, workers=args.workers, executor=name,
                             validation_variants=args.validation)
         for _ in range(args.repeat):
@@ -55,9 +58,10 @@ def main() -> None:
         r = rates[name]
         print(f"{name:>5}: {len(inputs)} accidents, min {min(r):.0f} / median "
               f"{statistics.median(r):.0f} accidents per hour ({args.workers} workers)", flush=True)
-    ratio = statistics.median(rates["ray"]) / statistics.median(rates["local"])
-    print(f"ray / local: {ratio:.2f}")
-    print(f"identical campaign.json groups: {groups['local'] == groups['ray']}")
+    if len(rates) == 2:
+        ratio = statistics.median(rates["ray"]) / statistics.median(rates["local"])
+        print(f"ray / local: {ratio:.2f}")
+        print(f"identical campaign.json groups: {groups['local'] == groups['ray']}")
 
 
 if __name__ == "__main__":

@@ -21,17 +21,34 @@ def test_campaign_lists_groups_and_failures_and_writes_its_files(small_campaign)
     assert (out / "runs" / "red_truck" / "report.json").exists()
 
 
-def test_resume_reads_finished_accidents_back_and_refuses_without_it(small_campaign, rocas, tmp_path):
+def test_resume_reads_finished_accidents_back_and_refuses_without_it(small_campaign, rocas, monkeypatch,
+                                                                     tmp_path):
     out, c = small_campaign
     src = [str(p) for p in collect_inputs([c["accidents"][0]["source"]])[0].path.parent.glob("*.toml")]
     args = ["triage", *src, "--out", out, "--seed", 1, "--budget", 16, "--population", 8,
             "--workers", 1, "--executor", "serial"]
     refused = rocas(*args)
     assert refused.code == 2 and "--resume" in refused.stderr
+
+    def no_second_analysis(*a, **kw):
+        raise AssertionError("a finished accident was analysed again")
+
+    monkeypatch.setattr("rocas.pipeline.analyze.analyze", no_second_analysis)
     again = rocas(*args, "--resume", "--json")
     assert again.code == 0, again.stderr
     got = json.loads(again.stdout)
     assert got["groups"] == c["groups"] and got["failed"] == c["failed"]
+    # a finished analysis made with other settings is not taken for this campaign's (in a copy:
+    # the session's campaign stays as it is)
+    import shutil
+
+    shutil.copytree(out, tmp_path / "c")
+    other_args = [*args[:args.index("--out") + 1], tmp_path / "c", *args[args.index("--out") + 2:]]
+    other_args[other_args.index("--seed") + 1] = 2
+    other = rocas(*other_args, "--resume", "--json")
+    assert other.code == 0, other.stderr
+    failed = {f["name"]: f["reason"] for f in json.loads(other.stdout)["failed"]}
+    assert "other settings" in failed["red_truck"]
 
 
 def test_a_recording_beside_its_ground_truth_is_one_accident(tmp_path):
