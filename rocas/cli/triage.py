@@ -100,12 +100,14 @@ def render(c: dict[str, Any], out: Path, env: Env) -> None:
 
     con = env.out()
     t = Table(title=f"{c['analysed']} of {c['accidents_total']} accidents in {len(c['groups'])} groups")
-    for col in ("group", "root cause", "accidents", "agreement", "documented types"):
+    for col in ("group", "root cause", "accidents", "agreement", "documented types",
+                "documented root cause"):
         t.add_column(col)
     for g in c["groups"]:
         t.add_row(g["id"], g["root_cause"], str(g["count"]),
                   ", ".join(f"{k} {v}" for k, v in g["agreement"].items()),
-                  ", ".join(f"{k} {v}" for k, v in g["types"].items()))
+                  ", ".join(f"{k} {v}" for k, v in g["types"].items()),
+                  {True: "yes", False: "no"}.get(g.get("documented"), ""))
     con.print(t)
     for f in c["failed"]:
         con.print(f"failed: {f['name']} ({f['source']}): {f['reason']}", soft_wrap=True)

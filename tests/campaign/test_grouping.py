@@ -76,3 +76,13 @@ def test_campaign_counts_groups_and_accidents_whose_root_cause_is_the_documented
     assert [(g["root_cause"], g["documented"]) for g in c["groups"]] == [("p: x up", True),
                                                                           ("p: z down", False)]
     assert "1 of 2 groups, 2 of 5 accidents" in markdown(c)
+    import io
+    from pathlib import Path
+
+    from rocas.cli.console import Env
+    from rocas.cli.triage import render
+
+    out = io.StringIO()
+    render(c, Path("c"), Env(stdout=out, stderr=io.StringIO()))
+    assert ("root cause the documented one (module, parameter, direction): 1 of 2 groups, "
+            "2 of 5 accidents (40.0 %)") in out.getvalue()

@@ -33,7 +33,10 @@ def test_resume_reads_finished_accidents_back_and_refuses_without_it(small_campa
     def no_second_analysis(*a, **kw):
         raise AssertionError("a finished accident was analysed again")
 
-    monkeypatch.setattr("rocas.pipeline.analyze.analyze", no_second_analysis)
+    import importlib
+
+    # the module (the package rocas.pipeline exports its function analyze under the same name)
+    monkeypatch.setattr(importlib.import_module("rocas.pipeline.analyze"), "analyze", no_second_analysis)
     again = rocas(*args, "--resume", "--json")
     assert again.code == 0, again.stderr
     got = json.loads(again.stdout)
