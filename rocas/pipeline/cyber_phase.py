@@ -41,13 +41,17 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
         tasks = [VariantTask(scn, overrides(m), scn.seed) for m in ms]
         return evaluate(run.executor, tasks, run.cfg.batch_size)
 
-    # each simulated fix's smallest gap to anything [m], for choosing among shrunk fixes
+    # each simulated fix's smallest gap to anything [m] and path length driven [m], for
+    # choosing among shrunk fixes
     separation: dict[Mutation, float] = {}
+    driven: dict[Mutation, float] = {}
+    blocked = ended_blocked(orig, scn.dt_s)
 
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         out = []
         for m, r in zip(ms, run_fixes(ms), strict=True):
             separation[m] = r.outcome.min_separation_m
+            driven[m] = driven_m(r.ego_xy)
             out.append(((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), space.distance(m)),
                         violation(r.outcome)))
         return out
@@ -100,9 +104,13 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
         unseen = [m for m in dict.fromkeys(smalls) if m not in separation]
         if unseen:
             batch(unseen)
+        # with an accident that left the ego standing, a fix that drives it no farther only
+        # softened the stop (ranked after the fixes that get it past)
+        stalled = [blocked and driven[m] < driven_m(orig.ego_xy) + PROGRESS_MARGIN_M
+                   for m in smalls]
         best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
                                    separation=[separation[m] for m in smalls],
-                                   originals=originals)
+                                   originals=originals, stalled=stalled)
         small, chosen = smalls[best], candidates[best]
         result["search_best"] = cand_json(chosen)
         result["minimise_evaluations"] = scores.simulated
@@ -110,8 +118,9 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
             {"search": cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
              "h2": round(space.distance(m), 6),
              # None when nothing was ever near (no actor or object): JSON has no infinity
-             "min_separation_m": separation[m] if np.isfinite(separation[m]) else None}
-            for c, m in zip(candidates, smalls, strict=True)]
+             "min_separation_m": separation[m] if np.isfinite(separation[m]) else None,
+             "driven_m": round(driven[m], 3), "stalled": st}
+            for c, m, st in zip(candidates, smalls, stalled, strict=True)]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
 
         def described(m: Mutation) -> list[dict[str, Any]]:
@@ -137,7 +146,8 @@ ALTERNATIVE_H2_TOLERANCE = 0.05
 def _smallest_fix(h2: list[float], fixes: list[Mutation],
                   tolerance: float = ALTERNATIVE_H2_TOLERANCE,
                   separation: list[float] | None = None,
-                  originals: Mapping[str, float] | None = None) -> tuple[int, list[int]]:
+                  originals: Mapping[str, float] | None = None,
+                  stalled: list[bool] | None = None) -> tuple[int, list[int]]:
     """Index of the chosen shrunk fix, and the indices of the other fixes (other parameter
     sets, or the same parameters moved the other way) within ``tolerance`` of the smallest
     h2, in order: the same margin expressed in another parameter, or a second suspect.
@@ -150,15 +160,26 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
     A fix that leaves the ego less than SCRAPE_M from anything ranks after every fix that
     does not, whatever its h2: the collision became a scrape, nothing was repaired (an A11
     variant: `idm_exponent` 4 -> 6.4, h2 1.34, passes the truck at 6 cm; the collision
-    check, h2 1.42, keeps 6.1 m)."""
+    check, h2 1.42, keeps 6.1 m).
+
+    A fix marked ``stalled`` (the accident left the ego standing, and this fix drives it no
+    farther: :func:`ended_blocked`, PROGRESS_MARGIN_M) ranks after every fix that is not, and
+    its gap never makes it the repair: it kept its distance by not driving. An A2 variant: the
+    nudge look-ahead 40 -> 50 m (h2 1.11) turns the hard brake in front of the parked pair into
+    a gentle stop there (5.8 m from both cars, 110 m driven like the accident run), while the
+    static buffer 0.6 -> 0.33 m (h2 1.09, 0.42 m) takes the ego through the gap (154 m)."""
     def scrape(i: int) -> bool:
         return separation is not None and separation[i] < SCRAPE_M
 
-    order = sorted(range(len(fixes)), key=lambda i: (scrape(i), h2[i], fixes[i].names))
+    def stall(i: int) -> bool:
+        return stalled is not None and stalled[i]
+
+    order = sorted(range(len(fixes)), key=lambda i: (scrape(i), stall(i), h2[i], fixes[i].names))
     close = [i for i in order if h2[i] <= h2[order[0]] + tolerance]
     best = order[0]
     if separation is not None:
-        widest = max(close, key=lambda i: (separation[i], -h2[i]))
+        widest = max((i for i in close if stall(i) <= stall(best)),
+                     key=lambda i: (separation[i], -h2[i]))
         if separation[widest] >= separation[best] + SEPARATION_MARGIN_M:
             best = widest
 
@@ -179,6 +200,30 @@ SEPARATION_MARGIN_M = 0.5
 #: a fix that leaves the ego closer than this [m] to any actor or object is a scrape (the
 #: catalog's chosen fixes keep 0.43 m or more: A2's passes a parked car at 0.43 m)
 SCRAPE_M = 0.25
+
+
+#: a fix must drive the ego this much farther [m] than an accident run that left it standing
+#: (A2's variants: a gentle stop in front of the parked pair drives 0-0.3 m less than the
+#: accident, the repair 36-44 m more)
+PROGRESS_MARGIN_M = 5.0
+#: an accident run whose ego covered less than this [m] in its last second ended standing
+STANDING_M = 2.0
+
+
+def driven_m(ego_xy: np.ndarray) -> float:
+    """Path length [m] of ego positions ``ego_xy`` (shape (T + 1, 2))."""
+    steps = np.diff(np.asarray(ego_xy, dtype=float), axis=0)
+    return float(np.sqrt(steps[:, 0] * steps[:, 0] + steps[:, 1] * steps[:, 1]).sum())
+
+
+def ended_blocked(accident: VariantResult, dt_s: float) -> bool:
+    """Whether the accident run left the ego standing: no collision, and its ego covered less
+    than STANDING_M in the run's last second (an emergency stop it never drove on from). A
+    collision run is excluded: there, waiting for the other actor can be the repair."""
+    if accident.outcome.collided:
+        return False
+    k = max(1, int(round(1.0 / dt_s)))
+    return driven_m(accident.ego_xy[-(k + 1):]) < STANDING_M
 
 
 def _first_fix(res: SearchResult, h1_limit: float) -> int | None:

@@ -146,3 +146,45 @@ def test_a_fix_that_leaves_a_scrape_ranks_after_every_one_that_keeps_a_gap():
     assert fixes[_smallest_fix([1.339, 1.417, 1.577], fixes, separation=[0.43, 6.11, 6.86])[0]] == idm
     assert fixes[_smallest_fix([1.339, 1.417, 1.577], fixes,
                                separation=[float("inf"), 6.11, 6.86])[0]] == idm
+
+
+def test_a_fix_that_leaves_the_ego_standing_where_the_accident_left_it_is_no_repair():
+    """An A2 variant: the nudge look-ahead 40 -> 50.3 m (h2 1.11) turns the hard brake in front
+    of the parked pair into a gentle stop there and keeps 5.8 m from both cars; the static
+    buffer 0.6 -> 0.33 m (h2 1.09) passes them at 0.42 m. Without the progress rule the wider
+    gap chose the look-ahead; the ego it leaves stands where the accident left it."""
+    from rocas.pipeline.cyber_phase import _smallest_fix
+
+    buf = Mutation({"planning.static_obstacle_lateral_buffer_m": 0.328})
+    look = Mutation({"planning.nudge_lookahead_m": 50.3})
+    fixes = [look, buf]
+    h2, sep = [1.109, 1.091], [5.84, 0.42]
+    assert fixes[_smallest_fix(h2, fixes, separation=sep)[0]] == look   # the gap alone
+    best, near = _smallest_fix(h2, fixes, separation=sep, stalled=[True, False])
+    assert fixes[best] == buf and [fixes[i] for i in near] == [look]
+    # a stalled fix ranks after the others whatever its h2, and wins only when all are stalled
+    assert fixes[_smallest_fix([1.05, 1.4], fixes, separation=sep, stalled=[True, False])[0]] == buf
+    assert fixes[_smallest_fix([1.05, 1.4], fixes, separation=sep, stalled=[True, True])[0]] == look
+
+
+def test_an_accident_ended_blocked_when_its_ego_stood_without_a_collision():
+    from rocas.pipeline.cyber_phase import driven_m, ended_blocked
+    from rocas.pipeline.evaluate import VariantResult
+    from rocas.sim.oracles import Outcome
+
+    def outcome(collided: bool) -> Outcome:
+        return Outcome(collided, 8.0 if collided else None, "car" if collided else None,
+                       "actor" if collided else None, None, not collided,
+                       None if collided else 8.0, False, None, False, not collided, 7.0, 1.0, 0.3)
+
+    # 10 s at 0.05 s: 10 m/s for 8 s, then 0.5 m/s (crawling in front of the obstacle)
+    speed = np.r_[np.full(160, 10.0), np.full(40, 0.5)]
+    xs = np.r_[0.0, np.cumsum(speed * 0.05)]
+    xy = np.stack([xs, np.zeros_like(xs)], axis=1)
+    assert driven_m(xy) == pytest.approx(81.0)
+    stood = VariantResult(outcome(False), xy, np.zeros((201, 0, 2)))
+    assert ended_blocked(stood, 0.05)
+    # a collision run, or one that drove on at 10 m/s, did not end blocked
+    assert not ended_blocked(VariantResult(outcome(True), xy, np.zeros((201, 0, 2))), 0.05)
+    moving = np.stack([np.arange(201) * 0.5, np.zeros(201)], axis=1)
+    assert not ended_blocked(VariantResult(outcome(False), moving, np.zeros((201, 0, 2))), 0.05)
