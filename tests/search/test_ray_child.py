@@ -10,43 +10,51 @@ never passed."""
 from __future__ import annotations
 
 import os
-import re
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 TESTS = Path(__file__).with_name("test_ray_executor.py")
-#: the line pytest ends every completed run with ("4 passed in 21.3s", "1 failed, 3 passed ...")
-_SUMMARY = re.compile(r"^=*\s*(\d+ (passed|failed|error|errors|skipped)\b.*) in [\d.]+s", re.M)
 
 
-def _run_child() -> subprocess.CompletedProcess[str]:
+def _run_child(report: Path) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ, ROCAS_RAY_CHILD="1")
     return subprocess.run([sys.executable, "-m", "pytest", str(TESTS), "-p", "no:cacheprovider",
-                           "-q", "-ra", "-m", ""], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=900)
+                           "-m", "", f"--junitxml={report}"], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=900)
+
+
+def _counts(report: Path) -> dict[str, int] | None:
+    """tests/failures/errors/skipped of the child's JUnit report, or None if it wrote none (it
+    ended before pytest could report: Ray ended it)."""
+    if not report.exists():
+        return None
+    suite = ET.parse(report).getroot()
+    suite = suite if suite.tag == "testsuite" else suite.find("testsuite")
+    return {k: int(suite.get(k, 0)) for k in ("tests", "failures", "errors", "skipped")}
 
 
 def _tail(done: subprocess.CompletedProcess[str], lines: int = 30) -> str:
     return "\n".join((done.stdout + "\n" + done.stderr).strip().splitlines()[-lines:])
 
 
-def test_the_ray_executor_tests_in_a_child_process():
+def test_the_ray_executor_tests_in_a_child_process(tmp_path):
     pytest.importorskip("ray")
     deaths = []
-    for _ in range(2):
-        done = _run_child()
-        summary = _SUMMARY.search(done.stdout)
-        if summary is None:  # the child ended before pytest could report: Ray ended it
+    for attempt in range(2):
+        report = tmp_path / f"child-{attempt}.xml"
+        done = _run_child(report)
+        counts = _counts(report)
+        if counts is None:
             deaths.append(f"exit code {done.returncode}:\n{_tail(done)}")
             continue
-        assert done.returncode == 0, f"the Ray tests failed in the child:\n{_tail(done, 80)}"
-        counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|failed|skipped)",
-                                                          summary.group(1)))
-        assert counts.get("passed", 0) >= 4 and not counts.get("skipped"), summary.group(1)
+        assert done.returncode == 0 and not counts["failures"] and not counts["errors"], (
+            f"the Ray tests failed in the child:\n{_tail(done, 80)}")
+        assert counts["tests"] >= 4 and not counts["skipped"], (counts, _tail(done))
         return
     pytest.skip("Ray's local cluster ended the test process twice on this machine; last time "
                 + deaths[-1])
