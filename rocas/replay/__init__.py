@@ -18,11 +18,12 @@ Heavy modules load on first use, so ``import rocas`` stays cheap.
 
 from __future__ import annotations
 
-import importlib
 import os
 import sys
 import types
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from rocas._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from rocas.replay.reconstruction import AccidentInfo, Reconstruction, reconstruct
@@ -39,16 +40,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _LAZY)
 
 
 class _CallableModule(types.ModuleType):
