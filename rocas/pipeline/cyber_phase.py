@@ -46,6 +46,7 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     separation: dict[Mutation, float] = {}
     driven: dict[Mutation, float] = {}
     blocked = ended_blocked(orig, scn.dt_s)
+    accident_driven = driven_m(orig.ego_xy)
 
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         out = []
@@ -106,8 +107,7 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
             batch(unseen)
         # with an accident that left the ego standing, a fix that drives it no farther only
         # softened the stop (ranked after the fixes that get it past)
-        stalled = [blocked and driven[m] < driven_m(orig.ego_xy) + PROGRESS_MARGIN_M
-                   for m in smalls]
+        stalled = [blocked and driven[m] < accident_driven + PROGRESS_MARGIN_M for m in smalls]
         best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
                                    separation=[separation[m] for m in smalls],
                                    originals=originals, stalled=stalled)
