@@ -120,6 +120,7 @@ class DiffResult:
             "complete": self.complete,
             "control_channel": p.control_channel,
             "path": list(p.path),
+            "fallback": p.fallback,
             "delta_s": self.delta_s,
             "bin_s": self.bin_s,
             "accident": self.accident,
@@ -327,7 +328,11 @@ def diff(
                 schema=_schema_name(res.channels[topic]),
             )
         )
-    pin = find_initial_module(graph, t_star, ctrl, delta_s)
+    ctrl_series = res.series.get(ctrl)
+    pin = find_initial_module(
+        graph, t_star, ctrl, delta_s,
+        control_differs_from_start=ctrl_series is not None and bool(np.any(ctrl_series.mdr > 0)),
+    )
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note

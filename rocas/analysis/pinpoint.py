@@ -8,6 +8,17 @@
    reachable module with the earliest t*. Ties (modules whose change points fall into the
    same bin, as when a whole pipeline reacts within one tick) go to the module farthest
    upstream along the walk, since deviations travel downstream; then by name.
+
+When the control channel itself has no change point, step 3 has no start: either the ego's
+commands were the same in both executions (the deviation upstream never reached the
+actuators, as when the ego stands with its emergency stop on in both), or they differ from the
+first messages on, so their difference is the channel's baseline (as when the trigger actor is
+in view and decides the ego's first move). The walk then starts from the whole set of modules
+the control channel depends on, unpruned, since no window can be measured from an undefined
+t*, less the modules that read the control channel (they report the vehicle's response to the
+commands, as the chassis does): the answer is the one with the earliest change point, ties as
+above by distance from the control channel and then by name, and
+:attr:`PinpointResult.fallback` says the answer was found this way and why.
 """
 
 from __future__ import annotations
@@ -45,6 +56,8 @@ class PinpointResult:
         removed_edges: every removed edge with its reason.
         path: node names from the control channel to the deviating module.
         exclusions: module -> why it is not the answer (for modules with a defined t*).
+        fallback: why the control channel gave the walk no start (it has no change point),
+            when the answer was taken from the modules it depends on; None for the paper's walk.
     """
 
     deviating_module: str | None
@@ -54,6 +67,7 @@ class PinpointResult:
     removed_edges: tuple[RemovedEdge, ...]
     path: tuple[str, ...]
     exclusions: dict[str, str]
+    fallback: str | None = None
 
 
 def _fmt(t: float | None) -> str:
@@ -89,6 +103,7 @@ def find_initial_module(
     channel_t_star: Mapping[str, float | None],
     control_channel: str,
     delta_s: float = 3.0,
+    control_differs_from_start: bool = False,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -97,6 +112,9 @@ def find_initial_module(
         channel_t_star: topic -> first change point [s] or None.
         control_channel: the channel to start from.
         delta_s: reaction window delta [s].
+        control_differs_from_start: whether the control channel's messages differ between
+            the recordings although it has no change point (only worded into
+            :attr:`PinpointResult.fallback`).
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -132,8 +150,23 @@ def find_initial_module(
         for v in downstream[u]:
             upstream[v].append(u)
     start: Node = (CHANNEL, control_channel)
+    fallback: str | None = None
+    if start in succ and t_star[start] is None:
+        # no change point on the control channel: start from everything it depends on
+        upstream = {n: [] for n in succ}
+        downstream = {u: list(outs) for u, outs in succ.items()}
+        for u, outs in succ.items():
+            for v in outs:
+                upstream[v].append(u)
+        fallback = (f"{control_channel} has no change point (its messages "
+                    + ("differ from the first ones on" if control_differs_from_start
+                       else "are the same in both recordings")
+                    + "), so the walk starts from every module it depends on")
     depth = _depths(upstream, start) if start in succ else {}
-    reachable = frozenset(n for k, n in depth if k == MODULE)
+    # a module that reads the control channel reports the vehicle's response to it (the
+    # chassis): without a change point on that channel, its deviation may be the commands'
+    feedback = {n for k, n in succ.get(start, ()) if k == MODULE} if fallback else set()
+    reachable = frozenset(n for k, n in depth if k == MODULE and n not in feedback)
     candidates = [
         (t_star[(MODULE, m)], -depth.get((MODULE, m), 0), m)
         for m in reachable
@@ -153,6 +186,9 @@ def find_initial_module(
             continue
         if m in reachable:
             exclusions[m] = _why_not(m, tm, deviating, t_star, depth, control_channel)
+        elif m in feedback:
+            exclusions[m] = (f"reads {control_channel}, which has no change point, so its change "
+                             "may be the vehicle's response to the commands")
         else:
             written = set(cmg.channels_written_by(m))
             cut = [
@@ -172,6 +208,7 @@ def find_initial_module(
         removed_edges=tuple(removed),
         path=path,
         exclusions=exclusions,
+        fallback=fallback,
     )
 
 

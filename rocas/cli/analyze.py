@@ -284,6 +284,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
             t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
         t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
+        if report.get("walk_fallback"):
+            t.add_row("", f"({report['walk_fallback']})")
     if report.get("confidence"):
         t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:

@@ -113,6 +113,8 @@ def render(result: DiffResult, env: Env) -> None:
                       _num(c.mdr_before), _num(c.mdr_after), change)
     out.print(table)
     out.print()
+    if p.fallback:
+        prose(out, f"Note: {p.fallback}.")
     if p.deviating_module:
         prose(out, "Walk:  " + " -> ".join(p.path))
         out.print(Text.assemble("Initial deviating module: ",
@@ -120,7 +122,7 @@ def render(result: DiffResult, env: Env) -> None:
     else:
         out.print(Text(
             f"No deviating module: no module reachable from {p.control_channel} has a change "
-            "point within the reaction window.", style="yellow"))
+            + ("point." if p.fallback else "point within the reaction window."), style="yellow"))
     if p.exclusions:
         out.print()
         out.print("Other modules:")

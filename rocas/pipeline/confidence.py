@@ -163,6 +163,7 @@ def _adopt(run: Run, answer: dict[str, Any], found: Any) -> None:
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
     run.state["done"]["diff"] = {"deviating_module": data["deviating_module"], "path": data["path"],
                                  "control_channel": data["control_channel"],
+                                 "fallback": data["fallback"],
                                  "adopted_from": answer["reference"]}
 
 

@@ -63,6 +63,8 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "triggering_entity": trig,
         "deviating_module": module,
         "path": diff.get("path", []),
+        # why the walk did not start at the control channel's change point (it had none)
+        "walk_fallback": diff.get("fallback"),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -226,6 +228,8 @@ def markdown(report: dict[str, Any]) -> str:
     if report["deviating_module"]:
         lines.append(f"- **Deviating module**: {report['deviating_module']} "
                      f"(walk: {' → '.join(report['path'])})")
+        if report.get("walk_fallback"):
+            lines.append(f"  - {report['walk_fallback'][:1].upper()}{report['walk_fallback'][1:]}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:

@@ -505,6 +505,8 @@ def _log_diff_json(rec: Any, data: dict[str, Any]) -> None:
         if module
         else "# Differential analysis\n\n**No deviating module found.**\n"
     )
+    if data.get("fallback"):
+        text += f"\nNote: {data['fallback']}.\n"
     rec.log("diff/report", rr.TextDocument(text, media_type="text/markdown"), static=True)
 
 

@@ -338,6 +338,8 @@ def report_markdown(result: DiffResult) -> str:
     else:
         lines.append("**No deviating module found** (no module reachable from the control "
                      "channel has a change point).")
+    if p.fallback:
+        lines += ["", f"Note: {p.fallback}."]
     lines += ["", "| channel | writers | t* [s] | MDR before | MDR after |", "|---|---|---|---|---|"]
     for c in result.channels:
         t = "—" if c.change_point_s is None else f"{c.change_point_s:.2f}"

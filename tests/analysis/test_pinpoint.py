@@ -50,10 +50,35 @@ def test_a_small_delta_cuts_the_walk_short():
     assert r.deviating_module == "planning"
 
 
-def test_no_change_on_the_control_channel_means_no_module():
+def test_no_change_on_the_control_channel_starts_from_what_it_depends_on():
+    # no window can be measured from an undefined t*: the earliest module the control channel
+    # depends on is the answer, except canbus, which reads /apollo/control (its chassis change
+    # at 1.5 s may be the vehicle's response to the commands)
     r = _run({**APPENDIX_A, "/apollo/control": None})
+    assert r.deviating_module == "prediction"
+    assert r.path == ("/apollo/control", "control", "/apollo/planning", "planning",
+                      "/apollo/prediction", "prediction")
+    assert "/apollo/control has no change point" in r.fallback
+    assert "reads /apollo/control" in r.exclusions["canbus"]
+    assert "later than prediction" in r.exclusions["planning"]
+
+
+def test_the_paper_walk_has_no_fallback():
+    assert _run(APPENDIX_A).fallback is None
+
+
+def test_no_change_anywhere_means_no_module():
+    r = _run(dict.fromkeys(APPENDIX_A))
     assert r.deviating_module is None
     assert r.path == ()
+
+
+def test_fallback_ties_go_upstream():
+    # perception and prediction depart in the same bin (the obstacle list and the forecasts
+    # of a car that starts to slow down); the control channel never does
+    r = _run({"/apollo/perception/obstacles": 5.3, "/apollo/prediction": 5.3,
+              "/apollo/planning": 8.5, "/apollo/control": None, "/apollo/canbus/chassis": None})
+    assert r.deviating_module == "perception"
 
 
 def test_edge_window_is_inclusive():
@@ -99,19 +124,23 @@ def test_exclusions_say_later_only_when_later_and_name_a_tie_by_name():
 
 def _networkx_walk(cmg, t_star, control, delta):
     """Algorithm 1's reachable set, depths and walk computed with networkx on ``cmg.graph``
-    (the walk rocas takes must be the one networkx's shortest_path takes)."""
+    (the walk rocas takes must be the one networkx's shortest_path takes). Without a change
+    point on the control channel, the whole graph less the control channel's readers."""
     import networkx as nx
 
+    start = (CHANNEL, control)
+    fallback = start in cmg.graph and t_star[start] is None
     pruned = cmg.graph.copy()
     for u, v in cmg.graph.edges:
         tu, tv = t_star[u], t_star[v]
-        if tu is None or tv is None or not tv - delta <= tu <= tv:
+        if not fallback and (tu is None or tv is None or not tv - delta <= tu <= tv):
             pruned.remove_edge(u, v)
     rev = pruned.reverse(copy=False)
-    start = (CHANNEL, control)
     if start not in rev:
         return frozenset(), {}, rev
-    reachable = frozenset(n for k, n in nx.descendants(rev, start) if k == MODULE)
+    readers = set(cmg.graph.successors(start)) if fallback else set()
+    reachable = frozenset(n for k, n in nx.descendants(rev, start)
+                          if k == MODULE and (k, n) not in readers)
     depth = nx.single_source_shortest_path_length(rev, start)
     return reachable, depth, rev
 
