@@ -329,9 +329,10 @@ def diff(
             )
         )
     ctrl_series = res.series.get(ctrl)
+    differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
     pin = find_initial_module(
         graph, t_star, ctrl, delta_s,
-        control_differs_from_start=ctrl_series is not None and bool(np.any(ctrl_series.mdr > 0)),
+        control_onset_s=float(ctrl_series.times_s[differing[0]]) if len(differing) else None,
     )
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings

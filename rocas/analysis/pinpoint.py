@@ -14,11 +14,13 @@ commands were the same in both executions (the deviation upstream never reached 
 actuators, as when the ego stands with its emergency stop on in both), or they differ from the
 first messages on, so their difference is the channel's baseline (as when the trigger actor is
 in view and decides the ego's first move). The walk then starts from the whole set of modules
-the control channel depends on, unpruned, since no window can be measured from an undefined
-t*, less the modules that read the control channel (they report the vehicle's response to the
-commands, as the chassis does): the answer is the one with the earliest change point, ties as
-above by distance from the control channel and then by name, and
-:attr:`PinpointResult.fallback` says the answer was found this way and why.
+the control channel depends on, unpruned (the channels between them differ from the start as
+well, without change points), less the modules that read the control channel (they report the
+vehicle's response to the commands, as the chassis does). When the commands differ, only a
+module whose change point falls within the window before their first differing bin can
+explain it. The answer is the one with the earliest change point, ties as above by distance
+from the control channel and then by name, and :attr:`PinpointResult.fallback` says the answer
+was found this way and why.
 """
 
 from __future__ import annotations
@@ -103,7 +105,7 @@ def find_initial_module(
     channel_t_star: Mapping[str, float | None],
     control_channel: str,
     delta_s: float = 3.0,
-    control_differs_from_start: bool = False,
+    control_onset_s: float | None = None,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -112,9 +114,9 @@ def find_initial_module(
         channel_t_star: topic -> first change point [s] or None.
         control_channel: the channel to start from.
         delta_s: reaction window delta [s].
-        control_differs_from_start: whether the control channel's messages differ between
-            the recordings although it has no change point (only worded into
-            :attr:`PinpointResult.fallback`).
+        control_onset_s: when the control channel has no change point but its messages
+            differ, the time of its first differing bin [s]: then only a change point at or
+            before it, and at most ``delta_s`` before it, can explain the commands' difference.
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -159,18 +161,22 @@ def find_initial_module(
             for v in outs:
                 upstream[v].append(u)
         fallback = (f"{control_channel} has no change point (its messages "
-                    + ("differ from the first ones on" if control_differs_from_start
+                    + (f"differ from {control_onset_s:g} s on" if control_onset_s is not None
                        else "are the same in both recordings")
-                    + "), so the walk starts from every module it depends on")
+                    + "), so the walk starts from every module it depends on"
+                    + (f" that departs within [{control_onset_s - delta_s:g}, "
+                       f"{control_onset_s:g}] s" if control_onset_s is not None else ""))
     depth = _depths(upstream, start) if start in succ else {}
     # a module that reads the control channel reports the vehicle's response to it (the
     # chassis): without a change point on that channel, its deviation may be the commands'
     feedback = {n for k, n in succ.get(start, ()) if k == MODULE} if fallback else set()
     reachable = frozenset(n for k, n in depth if k == MODULE and n not in feedback)
     candidates = [
-        (t_star[(MODULE, m)], -depth.get((MODULE, m), 0), m)
+        (tm, -depth.get((MODULE, m), 0), m)
         for m in reachable
-        if t_star[(MODULE, m)] is not None
+        if (tm := t_star[(MODULE, m)]) is not None and (
+            not fallback or control_onset_s is None
+            or control_onset_s - delta_s <= tm <= control_onset_s)
     ]
     deviating = min(candidates)[2] if candidates else None
 
@@ -184,7 +190,12 @@ def find_initial_module(
         tm = t_star[(MODULE, m)]
         if m == deviating or tm is None:
             continue
-        if m in reachable:
+        if m in reachable and fallback and control_onset_s is not None and not (
+                control_onset_s - delta_s <= tm <= control_onset_s):
+            exclusions[m] = (f"its change point ({_fmt(tm)}) is outside "
+                             f"[{control_onset_s - delta_s:g}, {control_onset_s:g}] s, the window "
+                             f"before {control_channel} first differs")
+        elif m in reachable:
             exclusions[m] = _why_not(m, tm, deviating, t_star, depth, control_channel)
         elif m in feedback:
             exclusions[m] = (f"reads {control_channel}, which has no change point, so its change "

@@ -73,6 +73,23 @@ def test_no_change_anywhere_means_no_module():
     assert r.path == ()
 
 
+def test_commands_that_differ_from_the_start_are_explained_only_by_earlier_change_points():
+    # /apollo/control differs from 0.1 s on, with no change point: prediction (0.1 s) can
+    # explain it, planning (3.7 s) cannot, and canbus reads the commands
+    t = {"/apollo/perception/obstacles": None, "/apollo/prediction": 0.1,
+         "/apollo/planning": 3.7, "/apollo/control": None, "/apollo/canbus/chassis": 0.2}
+    r = find_initial_module(build_cmg([], APOLLO), t, "/apollo/control", 3.0,
+                            control_onset_s=0.1)
+    assert r.deviating_module == "prediction"
+    assert "differ from 0.1 s on" in r.fallback
+    assert "outside [-2.9, 0.1] s" in r.exclusions["planning"]
+    # nothing upstream departs before the commands do: no answer rather than a consequence
+    late = {**t, "/apollo/prediction": 8.3}
+    r = find_initial_module(build_cmg([], APOLLO), late, "/apollo/control", 3.0,
+                            control_onset_s=0.1)
+    assert r.deviating_module is None
+
+
 def test_fallback_ties_go_upstream():
     # perception and prediction depart in the same bin (the obstacle list and the forecasts
     # of a car that starts to slow down); the control channel never does
