@@ -89,8 +89,12 @@ class ExternalStack:
     timeout_s: float = 600.0
     #: the registered stack the command simulates (its recordings name it), or None
     stack: str | None = None
-    #: processes a batch is split over
+    #: processes a batch is split over at most
     processes: int = 2
+    #: variants a process gets at least: starting one costs about 2 s (Python and imports),
+    #: what lav simulates of a 14 s scenario in about 100 variants (tests/benchmarks/
+    #: bench_external.py), so a smaller batch runs in one process
+    min_per_process: int = 64
 
     @classmethod
     def from_file(cls, path: str | os.PathLike[str], cache_dir: str | os.PathLike[str]
@@ -178,7 +182,8 @@ class ExternalStack:
                        seeds: Sequence[int]) -> Any:
         """N variants of one scenario structure through the command's batch mode, as a
         :class:`rocas.stacks.rollout.Rollout` (no digests). Cached variants are read back;
-        the others are split over ``processes`` processes, one batch each."""
+        the others are split over up to ``processes`` processes of at least
+        ``min_per_process`` variants, one batch each."""
         from rocas.stacks.rollout import Rollout
 
         keys = [self.key(s, self._overrides(p), seed)
@@ -190,7 +195,7 @@ class ExternalStack:
         todo = [i for i, k in enumerate(keys) if k not in rows and keys.index(k) == i]
         if todo:
             self.cache_dir.mkdir(parents=True, exist_ok=True)
-            parts = max(1, min(self.processes, len(todo)))
+            parts = max(1, min(self.processes, len(todo) // max(1, self.min_per_process)))
             chunks = [todo[j::parts] for j in range(parts)]
             with concurrent.futures.ThreadPoolExecutor(max_workers=parts) as pool:
                 for chunk, got in zip(chunks, pool.map(

@@ -66,10 +66,18 @@ def test_the_batch_mode_gives_the_in_process_rows_and_is_cached(tmp_path, monkey
     params = [{}, {}, dict(e.truth.fix)]
     seeds = [3, 3, 7]
     inproc = simulate_batch(scenarios, params, seeds)
+    calls = []
+    real_call = external.ExternalStack._call
+    monkeypatch.setattr(external.ExternalStack, "_call",
+                        lambda self, args: calls.append(args) or real_call(self, args))
     got = ext.simulate_batch(scenarios, params, seeds)
+    assert len(calls) == 1  # 3 variants: fewer than min_per_process, one process
     assert got.outcomes == inproc.outcomes and got.actor_ids == inproc.actor_ids
     for name in ("times", "ego", "actors", "min_gap"):
         assert np.array_equal(getattr(got, name), getattr(inproc, name)), name
+    split = dataclasses.replace(ext, cache_dir=tmp_path / "split", min_per_process=1)
+    assert split.simulate_batch(scenarios, params, seeds).outcomes == inproc.outcomes
+    assert len(calls) == 3  # two more processes, two and one variants
     monkeypatch.setattr(external.ExternalStack, "_call",
                         lambda self, args: pytest.fail("ran the command for a cached batch"))
     again = ext.simulate_batch(scenarios, params, seeds)
