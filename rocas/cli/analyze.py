@@ -80,6 +80,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scope", choices=("module", "all"), default="module",
                    help="cyber search over the deviating module (default) or every parameter")
     add_executor_arguments(p)
+    p.add_argument("--stack-file", metavar="STACK.toml",
+                   help="run every simulation through this external stack's command (its "
+                        "'stack' must be the recording's; results cached in RUN_DIR/external)")
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -123,6 +126,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         check_writable(args.rrd)  # before minutes of work, not after
     progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})
     executor = executor_from_arguments(args)
+    saved = _use_stack_file(args.stack_file, source, out) if args.stack_file else None
     try:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress,
@@ -135,6 +139,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
     finally:
         if executor is not None:
             executor.close()
+        if saved is not None:
+            _restore_env(saved)
     if args.json:
         env.stdout.write(json.dumps(report, indent=2) + "\n")
     else:
@@ -142,6 +148,47 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if args.rrd:
             env.out().print(f"Rerun recording: {args.rrd}")
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+
+
+def _use_stack_file(path: str, source: Any, out: Path) -> dict[str, str | None]:
+    """Route the analysis's simulations through the stack file's command (environment
+    variables, so spawned workers follow); returns the variables' previous values.
+
+    Raises:
+        UsageError: the file is unreadable or its command simulates another stack.
+    """
+    import os
+
+    from rocas.errors import UsageError
+    from rocas.stacks.external import EXTERNAL_CACHE_ENV, EXTERNAL_ENV, ExternalStack
+
+    stack_file = Path(path).resolve()
+    ext = ExternalStack.from_file(stack_file, out / "external")
+    if isinstance(source, Path):
+        from rocas.recording.reader import open_recording
+        from rocas.stacks.base import STACK_METADATA
+
+        meta = dict(open_recording(str(source)).scan().metadata)
+        wanted = meta.get(STACK_METADATA, {}).get("name", "ads")
+    else:
+        wanted = source.ego.stack
+    if ext.stack != wanted:
+        raise UsageError(f"{path}: its command simulates stack {ext.stack!r}, the accident's "
+                         f"is {wanted!r}", f'declare stack = "{wanted}" in the stack file')
+    saved = {k: os.environ.get(k) for k in (EXTERNAL_ENV, EXTERNAL_CACHE_ENV)}
+    os.environ[EXTERNAL_ENV] = str(stack_file)
+    os.environ[EXTERNAL_CACHE_ENV] = str((out / "external").resolve())
+    return saved
+
+
+def _restore_env(saved: dict[str, str | None]) -> None:
+    import os
+
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
 
 
 def kept_after_interrupt(out: Path, rrd: str | None) -> str:

@@ -13,11 +13,22 @@ rocas runs ``COMMAND --scenario S.json --config C.json --out run.mcap`` once per
 recording carrying the ``rocas.run`` outcome record (as :func:`rocas.stacks.rollout.rollout`
 does). Batches run as several processes at once; every result is cached under the input's
 hash (command, scenario, overrides, seed), so a repeated simulation is not run again.
+
+For an analysis the command also has a batch mode, ``COMMAND --batch B.json --out R.npz``:
+``B.json`` is ``{"runs": [{"scenario": ..., "params": {...}, "seed": N}, ...]}`` (variants of
+one scenario structure), ``R.npz`` holds what the searches read (``times`` (T + 1,), ``ego``
+(N, T + 1, 5), ``actors`` (N, T + 1, A, 4), ``min_gap`` (N, T + 1), ``actor_ids`` (A,) and
+``outcomes``, one ``rocas.run`` record per variant as JSON). A stack file that names the
+registered stack its command simulates (``stack = "lav"``) can stand in for it:
+:func:`external_for` reads ``ROCAS_EXTERNAL_STACK`` (the stack file; ``rocas analyze
+--stack-file`` sets it, spawned workers inherit it) and :mod:`rocas.stacks.rollout` then sends
+that stack's simulations through the command, batches split over ``processes`` processes.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import functools
 import hashlib
 import json
 import os
@@ -28,6 +39,9 @@ import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from rocas.errors import RecordingError, ScenarioError, UsageError
 from rocas.scenarios.loader import scenario_to_dict
@@ -73,6 +87,14 @@ class ExternalStack:
     parameters: tuple[ParamSpec, ...]
     cache_dir: Path
     timeout_s: float = 600.0
+    #: the registered stack the command simulates (its recordings name it), or None
+    stack: str | None = None
+    #: processes a batch is split over at most
+    processes: int = 2
+    #: variants a process gets at least: starting one costs about 2 s (Python and imports),
+    #: what lav simulates of a 14 s scenario in about 100 variants (tests/benchmarks/
+    #: bench_external.py), so a smaller batch runs in one process
+    min_per_process: int = 64
 
     @classmethod
     def from_file(cls, path: str | os.PathLike[str], cache_dir: str | os.PathLike[str]
@@ -91,8 +113,11 @@ class ExternalStack:
         if isinstance(params, str):
             params_path = path.parent / params
             params = tomllib.loads(params_path.read_text(encoding="utf-8"))
+        stack = data.get("stack")
+        if stack is not None and not isinstance(stack, str):
+            raise UsageError(f"{path}: 'stack' must be a stack name", 'stack = "lav"')
         return cls(str(data.get("name", path.stem)), tuple(command),
-                   read_parameters(params, str(path)), Path(cache_dir))
+                   read_parameters(params, str(path)), Path(cache_dir), stack=stack)
 
     def key(self, scenario: Scenario, overrides: Mapping[str, float], seed: int) -> str:
         """The input hash a result is cached under."""
@@ -101,12 +126,26 @@ class ExternalStack:
                           sort_keys=True).encode()
         return hashlib.sha256(blob).hexdigest()[:32]
 
+    def _overrides(self, params: Mapping[str, float] | None) -> dict[str, float]:
+        return StackParams(self.parameters, params, source=f"{self.name} config").overrides()
+
+    def _call(self, args: list[str]) -> None:
+        argv = [*self.command, *args]
+        try:
+            proc = subprocess.run(argv, capture_output=True, text=True, timeout=self.timeout_s,
+                                  check=False)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise UsageError(f"stack {self.name}: cannot run {argv[0]} ({exc})") from None
+        if proc.returncode != 0:
+            last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+            raise UsageError(f"stack {self.name}: {argv[0]} exited {proc.returncode}: {last}",
+                             "run the command by hand with these inputs")
+
     def run(self, scenario: Scenario, params: Mapping[str, float] | None = None,
             seed: int | None = None) -> ExternalResult:
         """One simulation (from the cache when its inputs were run before)."""
         seed = scenario.seed if seed is None else seed
-        overrides = StackParams(self.parameters, params, source=f"{self.name} config"
-                                ).overrides()
+        overrides = self._overrides(params)
         key = self.key(scenario, overrides, seed)
         out = self.cache_dir / f"{key}.mcap"
         if out.exists():
@@ -117,17 +156,11 @@ class ExternalStack:
             s_path.write_text(json.dumps(scenario_to_dict(scenario)), encoding="utf-8")
             c_path.write_text(json.dumps({"params": overrides, "seed": seed}), encoding="utf-8")
             run_path = Path(tmp, "run.mcap")
-            argv = [*self.command, "--scenario", str(s_path), "--config", str(c_path),
-                    "--out", str(run_path)]
-            try:
-                proc = subprocess.run(argv, capture_output=True, text=True,
-                                      timeout=self.timeout_s, check=False)
-            except (OSError, subprocess.TimeoutExpired) as exc:
-                raise UsageError(f"stack {self.name}: cannot run {argv[0]} ({exc})") from None
-            if proc.returncode != 0 or not run_path.exists():
-                last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-                raise UsageError(f"stack {self.name}: {argv[0]} exited {proc.returncode}: "
-                                 f"{last}", "run the command by hand with these inputs")
+            self._call(["--scenario", str(s_path), "--config", str(c_path), "--out",
+                        str(run_path)])
+            if not run_path.exists():
+                raise UsageError(f"stack {self.name}: {self.command[0]} wrote no recording",
+                                 "run the command by hand with these inputs")
             shutil.move(str(run_path), str(out.with_suffix(".part")))
             os.replace(out.with_suffix(".part"), out)
         return ExternalResult(out, read_outcome(out), False)
@@ -144,6 +177,106 @@ class ExternalStack:
             return list(pool.map(self.run, scenarios, params, seeds))
 
 
+    def simulate_batch(self, scenarios: Sequence[Scenario],
+                       params: Sequence[Mapping[str, float] | None],
+                       seeds: Sequence[int]) -> Any:
+        """N variants of one scenario structure through the command's batch mode, as a
+        :class:`rocas.stacks.rollout.Rollout` (no digests). Cached variants are read back;
+        the others are split over up to ``processes`` processes of at least
+        ``min_per_process`` variants, one batch each."""
+        from rocas.stacks.rollout import Rollout
+
+        keys = [self.key(s, self._overrides(p), seed)
+                for s, p, seed in zip(scenarios, params, seeds, strict=True)]
+        rows: dict[str, dict[str, Any]] = {}
+        for k in dict.fromkeys(keys):
+            if (self.cache_dir / f"{k}.rows.npz").exists():
+                rows[k] = _load_rows(self.cache_dir / f"{k}.rows.npz")
+        todo = [i for i, k in enumerate(keys) if k not in rows and keys.index(k) == i]
+        if todo:
+            self.cache_dir.mkdir(parents=True, exist_ok=True)
+            parts = max(1, min(self.processes, len(todo) // max(1, self.min_per_process)))
+            chunks = [todo[j::parts] for j in range(parts)]
+            with concurrent.futures.ThreadPoolExecutor(max_workers=parts) as pool:
+                for chunk, got in zip(chunks, pool.map(
+                        lambda c: self._batch([scenarios[i] for i in c],
+                                              [params[i] for i in c], [seeds[i] for i in c]),
+                        chunks), strict=True):
+                    for i, r in zip(chunk, got, strict=True):
+                        path = self.cache_dir / f"{keys[i]}.rows.npz"
+                        _save_rows(path, r)
+                        rows[keys[i]] = r
+        first = rows[keys[0]]
+        return Rollout(times=first["times"],
+                       ego=np.stack([rows[k]["ego"] for k in keys]),
+                       actors=np.stack([rows[k]["actors"] for k in keys]),
+                       min_gap=np.stack([rows[k]["min_gap"] for k in keys]),
+                       outcomes=[rows[k]["outcome"] for k in keys], digests={},
+                       actor_ids=first["actor_ids"])
+
+    def _batch(self, scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float] | None],
+               seeds: Sequence[int]) -> list[dict[str, Any]]:
+        """One process of the batch mode: per variant its rows and outcome."""
+        runs = [{"scenario": scenario_to_dict(s), "params": self._overrides(p), "seed": int(seed)}
+                for s, p, seed in zip(scenarios, params, seeds, strict=True)]
+        with tempfile.TemporaryDirectory(prefix="rocas-ext-") as tmp:
+            b_path, r_path = Path(tmp, "batch.json"), Path(tmp, "rows.npz")
+            b_path.write_text(json.dumps({"runs": runs}), encoding="utf-8")
+            self._call(["--batch", str(b_path), "--out", str(r_path)])
+            try:
+                with np.load(r_path, allow_pickle=False) as z:
+                    data = {k: z[k] for k in z.files}
+            except (OSError, ValueError) as exc:
+                raise RecordingError(f"stack {self.name}: unreadable batch result ({exc})",
+                                     "the batch mode writes an .npz (see rocas.stacks.external)"
+                                     ) from None
+        outcomes = json.loads(str(data["outcomes"]))
+        ids = tuple(str(a) for a in data["actor_ids"])
+        return [{"times": data["times"], "ego": data["ego"][i], "actors": data["actors"][i],
+                 "min_gap": data["min_gap"][i], "outcome": outcome_from_record(outcomes[i]),
+                 "actor_ids": ids} for i in range(len(runs))]
+
+
+def _save_rows(path: Path, r: Mapping[str, Any]) -> None:
+    from rocas.sim.recorder import outcome_metadata
+
+    part = path.with_suffix(".part.npz")
+    np.savez(part, times=r["times"], ego=r["ego"], actors=r["actors"], min_gap=r["min_gap"],
+             actor_ids=np.array(r["actor_ids"], dtype=str),
+             outcome=np.array(json.dumps(outcome_metadata(r["outcome"]))))
+    os.replace(part, path)
+
+
+def _load_rows(path: Path) -> dict[str, Any]:
+    with np.load(path, allow_pickle=False) as z:
+        return {"times": z["times"], "ego": z["ego"], "actors": z["actors"],
+                "min_gap": z["min_gap"], "actor_ids": tuple(str(a) for a in z["actor_ids"]),
+                "outcome": outcome_from_record(json.loads(str(z["outcome"])))}
+
+
+#: the stack file whose command stands in for the stack it names (``rocas analyze --stack-file``)
+EXTERNAL_ENV = "ROCAS_EXTERNAL_STACK"
+#: where its results are cached (default: ``rocas-external`` in the system's temporary folder)
+EXTERNAL_CACHE_ENV = "ROCAS_EXTERNAL_CACHE"
+
+
+def external_for(name: str) -> ExternalStack | None:
+    """The external stack that runs stack ``name``'s simulations (``ROCAS_EXTERNAL_STACK``
+    names a stack file with ``stack = name``), or None."""
+    path = os.environ.get(EXTERNAL_ENV)
+    if not path:
+        return None
+    cache = os.environ.get(EXTERNAL_CACHE_ENV) or str(Path(tempfile.gettempdir(),
+                                                            "rocas-external"))
+    ext = _from_file(path, cache)
+    return ext if ext.stack == name else None
+
+
+@functools.cache
+def _from_file(path: str, cache: str) -> ExternalStack:
+    return ExternalStack.from_file(path, cache)
+
+
 def read_outcome(path: str | os.PathLike[str]) -> Outcome:
     """The ``rocas.run`` record of a recording as an :class:`Outcome`."""
     from rocas.recording.reader import open_recording
@@ -152,6 +285,12 @@ def read_outcome(path: str | os.PathLike[str]) -> Outcome:
     if meta is None:
         raise RecordingError(f"{path}: no {RUN_METADATA} metadata record",
                              "an external stack must write the run's outcome")
+    return outcome_from_record(meta)
+
+
+def outcome_from_record(meta: Mapping[str, str]) -> Outcome:
+    """A ``rocas.run`` record (strings, as :func:`rocas.sim.recorder.outcome_metadata`
+    writes them) as an :class:`Outcome`."""
 
     def opt(k: str) -> float | None:
         return float(meta[k]) if meta.get(k) else None

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -154,8 +155,12 @@ def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
         r = simulate_ads(scenario, params or None, seed, output=output)
         return SingleRun(r.outcome, r.times, r.ego, r.actors, r.min_gap, r.recording,
                          r.messages)
+    from rocas.stacks.external import external_for
     from rocas.stacks.registry import get_stack
 
+    ext = external_for(scenario.ego.stack)
+    if ext is not None:
+        return _simulate_external(ext, scenario, _merged(scenario, params), seed, output)
     r = rollout(get_stack(scenario.ego.stack), scenario, _merged(scenario, params), seed,
                 output=output)  # the recording writer writes atomically
     return SingleRun(r.outcomes[0], r.times, r.ego[0], r.actors[0], r.min_gap[0],
@@ -179,11 +184,36 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
                                seeds=list(seeds))
         return Rollout(times=r.times, ego=r.ego, actors=r.actors, min_gap=r.min_gap,
                        outcomes=r.outcomes, digests={}, actor_ids=r.actor_ids)
+    from rocas.stacks.external import external_for
     from rocas.stacks.registry import get_stack
 
-    return rollout_batch(get_stack(name), list(scenarios),
-                         [_merged(s, p) for s, p in zip(scenarios, params, strict=True)],
-                         list(seeds))
+    merged = [_merged(s, p) for s, p in zip(scenarios, params, strict=True)]
+    ext = external_for(name)
+    if ext is not None:
+        return ext.simulate_batch(list(scenarios), merged, list(seeds))
+    return rollout_batch(get_stack(name), list(scenarios), merged, list(seeds))
+
+
+def _simulate_external(ext: Any, scenario: Scenario, params: Mapping[str, float],
+                       seed: int | None, output: str | os.PathLike[str] | None) -> SingleRun:
+    """:func:`simulate` through an external stack's command: the rows from its batch mode,
+    the recording (when asked for) from its single-run mode, copied to ``output``."""
+    import shutil
+
+    seed = scenario.seed if seed is None else seed
+    r = ext.simulate_batch([scenario], [params], [seed])
+    recording, messages = None, 0
+    if output is not None:
+        from rocas.recording.reader import open_recording
+
+        one = ext.run(scenario, params, seed)
+        part = f"{os.fspath(output)}.part"
+        shutil.copyfile(one.recording, part)
+        os.replace(part, output)
+        recording = os.fspath(output)
+        messages = sum(1 for _ in open_recording(recording).messages())
+    return SingleRun(r.outcomes[0], r.times, r.ego[0], r.actors[0], r.min_gap[0], recording,
+                     messages)
 
 
 def with_stack(scenario: Scenario, name: str) -> Scenario:

@@ -127,3 +127,20 @@ def test_a_catalog_file_loads_as_its_scenario():
 
     path = resources.files("rocas.scenarios") / "catalog" / "a10_skewed_junction_light.toml"
     assert load_scenario(path) == entry("A10").scenario
+
+
+def test_check_ranges_false_reads_back_what_a_mutation_made():
+    """An external stack reads the scenarios rocas simulates: a mutated actor may start past
+    its track's end, which only ``check_ranges=False`` accepts (every other check stays)."""
+    from rocas.scenarios.catalog import entry
+    from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
+
+    doc = scenario_to_dict(entry("A9").scenario)
+    doc["actors"][0]["start_s_m"] = 1e4
+    with pytest.raises(ScenarioError, match="out of range"):
+        scenario_from_dict(doc)
+    s = scenario_from_dict(doc, check_ranges=False)
+    assert s.actors[0].start_s_m == 1e4
+    doc["actors"][0]["start_s_m"] = "far"
+    with pytest.raises(ScenarioError, match="expected a number"):
+        scenario_from_dict(doc, check_ranges=False)

@@ -5,6 +5,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rocas.errors import UsageError
@@ -50,3 +51,58 @@ def test_a_failing_command_is_reported_in_one_line(tmp_path):
     s = dataclasses.replace(entry("A9").scenario, duration_s=0.5)
     with pytest.raises(UsageError, match="exited 1: boom"):
         ext.run(s)
+
+
+@pytest.mark.slow
+def test_the_batch_mode_gives_the_in_process_rows_and_is_cached(tmp_path, monkeypatch):
+    """What an analysis reads through the adapter (trajectories, gaps, outcomes of a batch)
+    is bit-identical to the in-process batch, and a repeated batch starts no process."""
+    from rocas.stacks import external
+    from rocas.stacks.rollout import simulate_batch
+
+    ext = dataclasses.replace(_stack(tmp_path), stack="lav")
+    e = entry("L3", "lav")
+    scenarios = [e.scenario, e.reference_scenario, e.scenario]
+    params = [{}, {}, dict(e.truth.fix)]
+    seeds = [3, 3, 7]
+    inproc = simulate_batch(scenarios, params, seeds)
+    calls = []
+    real_call = external.ExternalStack._call
+    monkeypatch.setattr(external.ExternalStack, "_call",
+                        lambda self, args: calls.append(args) or real_call(self, args))
+    got = ext.simulate_batch(scenarios, params, seeds)
+    assert len(calls) == 1  # 3 variants: fewer than min_per_process, one process
+    assert got.outcomes == inproc.outcomes and got.actor_ids == inproc.actor_ids
+    for name in ("times", "ego", "actors", "min_gap"):
+        assert np.array_equal(getattr(got, name), getattr(inproc, name)), name
+    split = dataclasses.replace(ext, cache_dir=tmp_path / "split", min_per_process=1)
+    assert split.simulate_batch(scenarios, params, seeds).outcomes == inproc.outcomes
+    assert len(calls) == 3  # two more processes, two and one variants
+    monkeypatch.setattr(external.ExternalStack, "_call",
+                        lambda self, args: pytest.fail("ran the command for a cached batch"))
+    again = ext.simulate_batch(scenarios, params, seeds)
+    assert again.outcomes == inproc.outcomes
+
+
+def test_simulations_go_through_the_adapter_only_for_the_stack_it_names(tmp_path, monkeypatch):
+    from rocas.stacks.external import EXTERNAL_CACHE_ENV, EXTERNAL_ENV, external_for
+
+    monkeypatch.delenv(EXTERNAL_ENV, raising=False)
+    assert external_for("lav") is None
+    monkeypatch.setenv(EXTERNAL_ENV, str(STACK_FILE))
+    monkeypatch.setenv(EXTERNAL_CACHE_ENV, str(tmp_path))
+    ext = external_for("lav")
+    assert ext is not None and ext.name == "lav-process" and ext.cache_dir == tmp_path
+    assert external_for("ads") is None
+
+
+def test_analyze_refuses_a_stack_file_for_another_stack(rocas, tmp_path):
+    other = tmp_path / "other.toml"
+    other.write_text('name = "x"\ncommand = ["x-sim"]\nstack = "ads"\n'
+                     '[parameters.planner]\n'
+                     'a = { default = 1.0, range = [0.0, 2.0], unit = "", doc = "a" }\n')
+    rec = Path(__file__).resolve().parents[2] / "recordings" / "lav" / \
+        "l01_red_truck_roundabout.mcap"
+    r = rocas("analyze", rec, "--out", tmp_path / "run", "--stack-file", other)
+    assert r.code != 0 and "simulates stack 'ads', the accident's is 'lav'" in r.stderr
+    assert "Traceback" not in r.stderr

@@ -5,6 +5,10 @@ waypoints are where that profile puts the ego along the route at every ``waypoin
 ``plan_collide`` compares the ego's planned position with each forecast agent's position at the
 same times: closer (centre to centre) than ``dist_threshold_moving_m`` for a moving agent, or
 than ``dist_threshold_static_m`` plus both half-widths for a standing one, is a collision.
+A collision holds for ``COLLIDE_HOLD_S``: the check samples the plan only at the forecast's
+times (0.5 s, about 5 m apart at speed), so an agent near the threshold is caught at some
+frames and slips between samples at others, and without the hold the hazard brake chatters
+on and off at the planner's rate.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ PLAN_ACCEL_MPS2 = 2.0     # [m/s^2] speed rise the waypoints assume
 CURVE_PREVIEW_M = 30.0    # [m] curvature this far ahead limits the speed
 MIN_WAYPOINT_GAP_M = 1.0  # [m] waypoints stay at least this far apart (a standing ego)
 BEHIND_M = 1.0            # [m] agents whose centre is this far behind the ego's are not checked
+COLLIDE_HOLD_S = 0.5      # [s] a detected plan collision is kept this long after its last frame
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,8 +52,15 @@ def _distance_along(v0: np.ndarray, v1: np.ndarray, t: np.ndarray) -> np.ndarray
 
 
 class Planner:
-    def __init__(self, world: BatchWorld, params: Mapping[str, np.ndarray]) -> None:
+    def __init__(self, world: BatchWorld, params: Mapping[str, np.ndarray], period_s: float
+                 ) -> None:
+        """``period_s``: time between two calls of :meth:`step` [s]."""
         self.world = world
+        n = world.batch_size
+        self.hold_steps = int(round(COLLIDE_HOLD_S / period_s))
+        self.held = np.zeros(n, dtype=np.int64)  # (N,) frames the last collision still holds
+        self.held_in_s = np.zeros(n)
+        self.held_agent = np.zeros(n, dtype=np.int64)
         self.max_speed = params["planner.max_speed_kmh"] / 3.6
         self.lat_accel = params["planner.max_lateral_accel_mps2"]
         self.spacing = params["planner.waypoint_spacing_s"]
@@ -88,5 +100,12 @@ class Planner:
         first_k = np.where(collide, any_k.argmax(axis=1), 0)
         when = np.where(collide, ft[np.arange(n), first_k], 0.0)
         first_m = hit[np.arange(n), :, first_k].argmax(axis=1)
-        return EgoPlan(np.stack([wx, wy], -1), tw, target, collide, when,
-                       np.where(collide, first_m, 0))
+        # the hold: a fresh collision restarts it, a held one keeps its time and agent
+        held = ~collide & (self.held > 0)
+        self.held = np.where(collide, self.hold_steps, np.maximum(self.held - 1, 0))
+        self.held_in_s = np.where(collide, when, self.held_in_s)
+        self.held_agent = np.where(collide, first_m, self.held_agent)
+        collide = collide | held
+        when = np.where(held, self.held_in_s, when)
+        agent = np.where(held, self.held_agent, np.where(collide, first_m, 0))
+        return EgoPlan(np.stack([wx, wy], -1), tw, target, collide, when, agent)

@@ -78,7 +78,7 @@ class LavRun:
         self.gnss = Gnss(world, params)
         self.pnp = PerceptionPrediction(world, params, self.period_ticks * world.dt_s)
         self.brake_model = BrakeModel(world, params)
-        self.planner = Planner(world, params)
+        self.planner = Planner(world, params, self.period_ticks * world.dt_s)
         self.controller = Controller(params, world.dt_s, world.batch_size)
         self.ego: EgoEstimate | None = None
         self.agents: Agents | None = None
