@@ -168,7 +168,10 @@ def _reidentify(d: Detections, a: _Piece, b: _Piece, gap: float,
 def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
             ) -> list[list[_Piece]]:
     """Link pieces into chains (greedy on the extrapolation distance; id switches and short
-    gaps first, then re-identification across long gaps along the map)."""
+    gaps first, then re-identification along the map: across long gaps, and across short
+    ones whose straight-line prediction misses the gate, as when an actor speeding up is
+    lost for a second and the tracker's velocity lags at one end and restarts from rest at
+    the other)."""
     links = []
     kinds = [_coarse(d, p.rows) for p in pieces]
     ids = [_identity(d, p.rows) for p in pieces]
@@ -191,7 +194,7 @@ def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
                 dist = float(np.hypot(*(d.xy[rb] - pred)))
                 if dist <= STITCH_GATE_M + STITCH_GATE_PER_S * gap:
                     links.append((dist + 0.1 * gap, i, j))
-                continue
+                    continue
             (sa, ca), (sb, cb) = ids[i], ids[j]
             if sa is None or sa != sb or (ca and cb and ca != cb):
                 continue
