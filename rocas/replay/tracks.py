@@ -38,6 +38,7 @@ MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurio
 STATIC_SPREAD_M = 0.8       # [m] a track whose detections stay this close to their median is parked
 MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
 DEFAULT_COLOR = "white"     # used when the colour was never recognised
+BRIDGE_VELOCITY_S = 0.3     # [s] span of a piece's end velocity for a bridge between pieces
 
 #: PerceptionObstacle.SubType -> (kind, model).
 SUB_TYPES: dict[int, tuple[str, str]] = {
@@ -292,6 +293,30 @@ def _classify(d: Detections, rows: np.ndarray) -> tuple[str, str, str, np.ndarra
     return kind, model, color, size, notes
 
 
+def _displacement_velocity(d: Detections, rows: np.ndarray, end: int) -> np.ndarray:
+    """(2,) velocity [m/s] at one end of a piece (``end`` 0: its first detection, -1: its
+    last) from the piece's own displacement over up to ``BRIDGE_VELOCITY_S``.
+
+    A tracker's velocity is a filter state, not a measurement: a new track starts it from
+    rest (the first published velocity of a truck re-acquired at 12 m/s was 1.6 m/s, pointing
+    backwards), and a lost one coasts on it. A bridge between two pieces takes its end
+    tangents from where the detections went instead.
+    """
+    t = d.times[rows]
+    if end == 0:
+        far = rows[min(int(np.searchsorted(t, t[0] + BRIDGE_VELOCITY_S + 1e-9)) - 1,
+                       len(rows) - 1)]
+        near = rows[0]
+    else:
+        far = rows[max(int(np.searchsorted(t, t[-1] - BRIDGE_VELOCITY_S - 1e-9)), 0)]
+        near = rows[-1]
+    span = abs(float(d.times[near] - d.times[far]))
+    if span <= 0.0:
+        return d.velocity[near]
+    step = d.xy[near] - d.xy[far] if end == -1 else d.xy[far] - d.xy[near]
+    return step / span
+
+
 def _resample(d: Detections, chain: list[_Piece], period: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Chain detections on a uniform grid: (times, xy, perceived heading, observed)."""
@@ -307,6 +332,10 @@ def _resample(d: Detections, chain: list[_Piece], period: float
     xy[slot] = d.xy[rows]
     heading[slot] = d.heading[rows]
     vel[slot] = d.velocity[rows]
+    starts = np.cumsum([0] + [len(p.rows) for p in chain])  # each piece's first index in rows
+    for k in range(1, len(chain)):  # the bridge between pieces k - 1 and k
+        vel[slot[starts[k] - 1]] = _displacement_velocity(d, chain[k - 1].rows, -1)
+        vel[slot[starts[k]]] = _displacement_velocity(d, chain[k].rows, 0)
     observed = ~np.isnan(xy[:, 0])
     obs = np.flatnonzero(observed)
     for a, b in zip(obs[:-1], obs[1:], strict=True):
