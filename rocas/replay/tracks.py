@@ -38,6 +38,7 @@ MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurio
 STATIC_SPREAD_M = 0.8       # [m] a track whose detections stay this close to their median is parked
 MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
 DEFAULT_COLOR = "white"     # used when the colour was never recognised
+BRIDGE_VELOCITY_S = 0.3     # [s] span of a piece's end velocity for a bridge between pieces
 
 #: PerceptionObstacle.SubType -> (kind, model).
 SUB_TYPES: dict[int, tuple[str, str]] = {
@@ -168,7 +169,10 @@ def _reidentify(d: Detections, a: _Piece, b: _Piece, gap: float,
 def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
             ) -> list[list[_Piece]]:
     """Link pieces into chains (greedy on the extrapolation distance; id switches and short
-    gaps first, then re-identification across long gaps along the map)."""
+    gaps first, then re-identification along the map: across long gaps, and across short
+    ones whose straight-line prediction misses the gate, as when an actor speeding up is
+    lost for a second and the tracker's velocity lags at one end and restarts from rest at
+    the other)."""
     links = []
     kinds = [_coarse(d, p.rows) for p in pieces]
     ids = [_identity(d, p.rows) for p in pieces]
@@ -191,7 +195,7 @@ def _stitch(d: Detections, pieces: list[_Piece], lanes: tuple[Lane, ...] = ()
                 dist = float(np.hypot(*(d.xy[rb] - pred)))
                 if dist <= STITCH_GATE_M + STITCH_GATE_PER_S * gap:
                     links.append((dist + 0.1 * gap, i, j))
-                continue
+                    continue
             (sa, ca), (sb, cb) = ids[i], ids[j]
             if sa is None or sa != sb or (ca and cb and ca != cb):
                 continue
@@ -289,6 +293,30 @@ def _classify(d: Detections, rows: np.ndarray) -> tuple[str, str, str, np.ndarra
     return kind, model, color, size, notes
 
 
+def _displacement_velocity(d: Detections, rows: np.ndarray, end: int) -> np.ndarray:
+    """(2,) velocity [m/s] at one end of a piece (``end`` 0: its first detection, -1: its
+    last) from the piece's own displacement over up to ``BRIDGE_VELOCITY_S``.
+
+    A tracker's velocity is a filter state, not a measurement: a new track starts it from
+    rest (the first published velocity of a truck re-acquired at 12 m/s was 1.6 m/s, pointing
+    backwards), and a lost one coasts on it. A bridge between two pieces takes its end
+    tangents from where the detections went instead.
+    """
+    t = d.times[rows]
+    if end == 0:
+        far = rows[min(int(np.searchsorted(t, t[0] + BRIDGE_VELOCITY_S + 1e-9)) - 1,
+                       len(rows) - 1)]
+        near = rows[0]
+    else:
+        far = rows[max(int(np.searchsorted(t, t[-1] - BRIDGE_VELOCITY_S - 1e-9)), 0)]
+        near = rows[-1]
+    span = abs(float(d.times[near] - d.times[far]))
+    if span <= 0.0:
+        return d.velocity[near]
+    step = d.xy[near] - d.xy[far] if end == -1 else d.xy[far] - d.xy[near]
+    return step / span
+
+
 def _resample(d: Detections, chain: list[_Piece], period: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Chain detections on a uniform grid: (times, xy, perceived heading, observed)."""
@@ -304,6 +332,10 @@ def _resample(d: Detections, chain: list[_Piece], period: float
     xy[slot] = d.xy[rows]
     heading[slot] = d.heading[rows]
     vel[slot] = d.velocity[rows]
+    starts = np.cumsum([0] + [len(p.rows) for p in chain])  # each piece's first index in rows
+    for k in range(1, len(chain)):  # the bridge between pieces k - 1 and k
+        vel[slot[starts[k] - 1]] = _displacement_velocity(d, chain[k - 1].rows, -1)
+        vel[slot[starts[k]]] = _displacement_velocity(d, chain[k].rows, 0)
     observed = ~np.isnan(xy[:, 0])
     obs = np.flatnonzero(observed)
     for a, b in zip(obs[:-1], obs[1:], strict=True):

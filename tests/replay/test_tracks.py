@@ -4,6 +4,7 @@ import numpy as np
 
 from rocas.replay.source import Detections
 from rocas.replay.tracks import build_tracks, smooth
+from rocas.scenarios.model import Lane
 
 
 def _detections(rows: list[tuple], colors: list[str]) -> Detections:
@@ -63,3 +64,50 @@ def test_smoother_keeps_lines_and_reduces_noise():
     assert np.allclose(smooth(t, line), line)  # local linear: no bias, even at the ends
     noisy = line + np.random.default_rng(2).normal(0, 0.2, line.shape)
     assert np.abs(smooth(t, noisy) - line).std() < 0.6 * np.abs(noisy - line).std()
+
+
+def _truck(ti: float) -> tuple[float, float]:
+    """(position [m], speed [m/s]) of a truck at 8 m/s speeding up at 2.5 m/s^2 from 1.5 s."""
+    a = max(ti - 1.5, 0.0)
+    return 8.0 * ti + 1.25 * a * a, 8.0 + 2.5 * a
+
+
+def _lost_truck() -> Detections:
+    """The truck seen 0.1-3.7 s (track 1; the tracker's velocity lags 2 m/s) and 4.8-7.8 s
+    (track 2; its velocity starts from rest, as a new track's does)."""
+    rows = []
+    for tid, times in ((1, np.arange(0.1, 3.75, 0.1)), (2, np.arange(4.8, 7.85, 0.1))):
+        for k, ti in enumerate(np.round(times, 6)):
+            x, v = _truck(float(ti))
+            reported = min(v, 1.6 + 2.0 * k) if tid == 2 else v - 2.0
+            rows.append((ti, tid, x, 2.0, 0.0, reported, 0.0, 8.5, 2.5, 3.3, 5, 3))
+    return _detections(rows, ["white"] * len(rows))
+
+
+def test_short_gap_missing_the_straight_line_gate_is_reidentified_on_the_map():
+    """A truck speeding up (8 -> 13.5 m/s) leaves the field of view for 1.1 s and comes back
+    under a new id. The tracker's velocity lags at the first piece's end and starts from rest
+    on the second piece, so the straight-line prediction misses the 3.65 m gate; on the map it
+    is the same truck (the mirrored A3 variant was replayed with two trucks)."""
+    lane = Lane(id="road", centerline=((-50.0, 2.0), (400.0, 2.0)))
+    d = _lost_truck()
+    last = int(np.flatnonzero(d.track_id == 1)[-1])
+    x_end, _ = _truck(3.7)
+    x_back, _ = _truck(4.8)
+    assert abs(x_back - (x_end + d.velocity[last, 0] * 1.1)) > 2.0 + 1.5 * 1.1  # the straight gate fails
+    tracks = build_tracks(d, 0.1, (lane,))
+    assert [tr.track_ids for tr in tracks] == [(1, 2)]
+    assert tracks[0].times[0] == 0.1 and abs(tracks[0].times[-1] - 7.8) < 1e-9
+
+
+def test_bridge_between_pieces_follows_the_detections_not_the_trackers_velocity():
+    """The bridge over the gap takes its end tangents from the pieces' displacements: the new
+    track's velocity starts from rest, and bridging with it made the truck slow down from 15
+    to 12 m/s in the gap and speed up again (a replayed actor limited to 2.5 m/s^2 then fell
+    metres behind)."""
+    lane = Lane(id="road", centerline=((-50.0, 2.0), (400.0, 2.0)))
+    tr = build_tracks(_lost_truck(), 0.1, (lane,))[0]
+    gap = (tr.times > 3.7 + 1e-6) & (tr.times < 4.8 - 1e-6)
+    true = np.array([_truck(float(t))[1] for t in tr.times[gap]])
+    assert np.all(np.diff(tr.speed[gap]) > 0.0)       # it keeps speeding up
+    assert np.max(np.abs(tr.speed[gap] - true)) < 1.5
