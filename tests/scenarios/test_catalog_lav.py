@@ -42,7 +42,7 @@ def runs():
 
 def test_the_lav_catalog_is_its_own():
     assert "lav" in stacks_with_catalog() and stacks_with_catalog()[0] == "ads"
-    assert IDS == sorted(IDS, key=lambda i: int(i[1:])) and len(IDS) >= 4
+    assert IDS == sorted(IDS, key=lambda i: int(i[1:])) and len(IDS) >= 5
     assert any(not e.truth.fixable for e in ENTRIES)
     assert len({e.truth.module for e in ENTRIES if e.truth.fixable}) >= 3
     lav = get_stack("lav")
@@ -134,6 +134,18 @@ def test_l3_is_the_planners_margin_not_the_ego_being_slow():
                                                         {"planner.dist_threshold_static_m": 0.5}])
     assert faster.collided and faster.collision_with == "follower"
     assert not lower.collided and not lower.emergency
+
+
+def test_l4_is_the_moving_threshold_against_the_cyclists_offset():
+    """L4: the cyclist rides 2.0 m off the lane's centre; plan_collide's moving threshold (a
+    centre distance, blind to the cyclist's width) catches it at 2.0 m and not at 1.9 m, and
+    a faster MAX_SPEED does not outrun the follower."""
+    _, (at, below, faster) = _outcomes(entry("L4", "lav"), [
+        {"planner.dist_threshold_moving_m": 2.0}, {"planner.dist_threshold_moving_m": 1.9},
+        {"planner.max_speed_kmh": 60.0}])
+    assert at.collided and at.collision_with == "follower"
+    assert not below.collided and not below.emergency
+    assert faster.collided and faster.collision_with == "follower"
 
 
 def test_a_plan_collision_holds_instead_of_chattering(tmp_path):
