@@ -204,3 +204,21 @@ def test_analyze_names_l1s_trigger_module_and_parameter(tmp_path):
     marks = score(_expected(e.truth), _found(rep))
     assert marks == {"verdict": True, "module": True, "parameter": True, "trigger": True,
                      "hit": True}, _found(rep)
+
+
+@pytest.mark.slow
+def test_analyze_names_l5s_module_and_no_configuration_fix(tmp_path):
+    """L5's cutter is in the camera's view from the start, so the brake channel's first change
+    point is the cut-in (inside Algorithm 1's window) and the walk reaches the brake model;
+    the first L5, whose cutter came into view 3.3 s before the control change, gave controller."""
+    from rocas.pipeline.analyze import analyze
+    from rocas.pipeline.bench import _expected, _found, score
+    from rocas.pipeline.config import AnalyzeConfig
+
+    e = entry("L5", "lav")
+    rep = analyze(RECORDINGS / f"{e.key}.mcap", tmp_path / "run",
+                  AnalyzeConfig(seed=0, validation_variants=8, alternate_references=0,
+                                second_opinion=False))
+    marks = score(_expected(e.truth), _found(rep))
+    assert marks == {"verdict": True, "module": True, "parameter": True, "trigger": True,
+                     "hit": True}, _found(rep)
