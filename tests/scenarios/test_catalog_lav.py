@@ -42,7 +42,7 @@ def runs():
 
 def test_the_lav_catalog_is_its_own():
     assert "lav" in stacks_with_catalog() and stacks_with_catalog()[0] == "ads"
-    assert IDS == sorted(IDS, key=lambda i: int(i[1:])) and len(IDS) >= 4
+    assert IDS == sorted(IDS, key=lambda i: int(i[1:])) and len(IDS) >= 5
     assert any(not e.truth.fixable for e in ENTRIES)
     assert len({e.truth.module for e in ENTRIES if e.truth.fixable}) >= 3
     lav = get_stack("lav")
@@ -136,6 +136,18 @@ def test_l3_is_the_planners_margin_not_the_ego_being_slow():
     assert not lower.collided and not lower.emergency
 
 
+def test_l4_is_the_moving_threshold_against_the_cyclists_offset():
+    """L4: the cyclist rides 2.0 m off the lane's centre; plan_collide's moving threshold (a
+    centre distance, blind to the cyclist's width) catches it at 2.0 m and not at 1.9 m, and
+    a faster MAX_SPEED does not outrun the follower."""
+    _, (at, below, faster) = _outcomes(entry("L4", "lav"), [
+        {"planner.dist_threshold_moving_m": 2.0}, {"planner.dist_threshold_moving_m": 1.9},
+        {"planner.max_speed_kmh": 60.0}])
+    assert at.collided and at.collision_with == "follower"
+    assert not below.collided and not below.emergency
+    assert faster.collided and faster.collision_with == "follower"
+
+
 def test_a_plan_collision_holds_instead_of_chattering(tmp_path):
     """The planner keeps a detected collision COLLIDE_HOLD_S: in L3, where the parked car is
     caught only at some of the forecast's samples, the flag stays up from its first frame to
@@ -186,6 +198,24 @@ def test_analyze_names_l1s_trigger_module_and_parameter(tmp_path):
     from rocas.pipeline.config import AnalyzeConfig
 
     e = entry("L1", "lav")
+    rep = analyze(RECORDINGS / f"{e.key}.mcap", tmp_path / "run",
+                  AnalyzeConfig(seed=0, validation_variants=8, alternate_references=0,
+                                second_opinion=False))
+    marks = score(_expected(e.truth), _found(rep))
+    assert marks == {"verdict": True, "module": True, "parameter": True, "trigger": True,
+                     "hit": True}, _found(rep)
+
+
+@pytest.mark.slow
+def test_analyze_names_l5s_module_and_no_configuration_fix(tmp_path):
+    """L5's cutter is in the camera's view from the start, so the brake channel's first change
+    point is the cut-in (inside Algorithm 1's window) and the walk reaches the brake model;
+    the first L5, whose cutter came into view 3.3 s before the control change, gave controller."""
+    from rocas.pipeline.analyze import analyze
+    from rocas.pipeline.bench import _expected, _found, score
+    from rocas.pipeline.config import AnalyzeConfig
+
+    e = entry("L5", "lav")
     rep = analyze(RECORDINGS / f"{e.key}.mcap", tmp_path / "run",
                   AnalyzeConfig(seed=0, validation_variants=8, alternate_references=0,
                                 second_opinion=False))
