@@ -55,6 +55,7 @@ def analyze(
     label, digest = source_identity(source)
     own = executor is None
     ex = executor if executor is not None else make_executor(cfg.executor, cfg.workers)
+    _warm_up(ex, cfg)
     # the folders this call makes: removed again if nothing was finished in them
     made = [d for d in (out, *out.parents) if not d.exists()]
     state: dict[str, Any] = {"done": {}}
@@ -68,6 +69,24 @@ def analyze(
     finally:
         if own:
             ex.close()
+
+
+def _warm_up(executor: Executor, cfg: AnalyzeConfig) -> None:
+    """Start the executor's workers (when it has some to start) while the replay runs, if the
+    analysis will use them: the confidence phase's alternate references, or a validation
+    whose waves give every worker PARALLEL_MIN_BATCH variants. Their start-up (a second or so
+    of imports each) then overlaps the replay instead of delaying the first phase that needs
+    them."""
+    import functools
+
+    from rocas.pipeline.evaluate import PARALLEL_MIN_BATCH, prepare_worker
+
+    warm_up = getattr(executor, "warm_up", None)
+    workers = max(1, getattr(executor, "workers", 1))
+    if warm_up is None or workers == 1:
+        return
+    if cfg.alternate_references or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH:
+        warm_up(functools.partial(prepare_worker, diffs=cfg.alternate_references > 0))
 
 
 def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:
