@@ -97,3 +97,21 @@ def test_a_worker_starts_watching_its_parent_before_any_heavy_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == ""
+
+
+def test_submit_runs_a_task_on_a_worker_without_waiting_and_warm_up_starts_them():
+    from rocas.search.executor import submit
+
+    with LocalExecutor(workers=2) as pool:
+        pool.warm_up(executor_tasks.pid_of_worker)
+        assert len(pool._get_pool()._processes) == 2  # started before any map or submit
+        job = submit(pool, executor_tasks.pid_of_worker)
+        assert job.result(timeout=60) != os.getpid()
+        with pytest.raises(ValueError, match="boom"):
+            submit(pool, executor_tasks.fail, "boom").result(timeout=60)
+    # with one worker, or an executor that cannot submit, the task runs here at once
+    assert LocalExecutor(workers=1).submit(executor_tasks.pid_of_worker).result() == os.getpid()
+    serial = submit(SerialExecutor(), executor_tasks.pid_of_worker)
+    assert serial.done() and serial.result() == os.getpid()
+    with pytest.raises(ValueError, match="here"):
+        submit(SerialExecutor(), executor_tasks.fail, "here").result()
