@@ -77,8 +77,6 @@ def _warm_up(executor: Executor, cfg: AnalyzeConfig) -> None:
     whose waves give every worker PARALLEL_MIN_BATCH variants. Their start-up (a second or so
     of imports each) then overlaps the replay instead of delaying the first phase that needs
     them."""
-    import functools
-
     from rocas.pipeline.evaluate import PARALLEL_MIN_BATCH, prepare_worker
 
     warm_up = getattr(executor, "warm_up", None)
@@ -86,7 +84,7 @@ def _warm_up(executor: Executor, cfg: AnalyzeConfig) -> None:
     if warm_up is None or workers == 1:
         return
     if cfg.alternate_references or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH:
-        warm_up(functools.partial(prepare_worker, diffs=cfg.alternate_references > 0))
+        warm_up(prepare_worker)
 
 
 def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:

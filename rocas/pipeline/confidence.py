@@ -96,6 +96,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     one's, the majority's best-ranked reference becomes the reference (reference.mcap,
     diff.json and the diff phase's summary are rewritten for it): two independent methods
     outweigh one reference. Otherwise the chosen reference's answer stands."""
+    from rocas.analysis.diff import diff
     from rocas.pipeline.substitution import second_opinion
 
     if run.done("confidence"):
@@ -109,17 +110,20 @@ def phase_confidence(run: Run) -> dict[str, Any]:
                                       run.cfg.alternate_references)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
                 "module": chosen_diff["deviating_module"], "path": chosen_diff["path"]}]
-    # each alternate reference (simulated and diffed) on a worker of its own while this
-    # process asks module substitution: three independent jobs, a few tenths of a second each
-    jobs = [submit(run.executor, reference_diff, apply_physical(scn, Mutation(dict(cand["mutation"]))),
-                   run.out / "accident.mcap", run.out / f"reference_{i}.mcap", run.cfg.delta_s)
-            for i, cand in enumerate(alternates, start=1)]
+    # each alternate reference is simulated on a worker of its own while this process asks
+    # module substitution: three independent simulations of half a second or so each; the
+    # diffs (a few hundredths of a second) are taken here, which spares the workers the
+    # differential analysis's imports
+    jobs = [submit(run.executor, record_reference, apply_physical(scn, Mutation(dict(cand["mutation"]))),
+                   run.out / f"reference_{i}.mcap") for i, cand in enumerate(alternates, start=1)]
     opinion = None
     if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
     diffs: list[dict[str, Any] | None] = [None]
     for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
-        found = job.result()
+        job.result()
+        found = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
+                     delta_s=run.cfg.delta_s).to_json()
         diffs.append(found)
         answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
                         "module": found["deviating_module"], "path": found["path"]})
@@ -147,15 +151,12 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     return result
 
 
-def reference_diff(scenario: Scenario, accident: Path, reference: Path, delta_s: float
-                   ) -> dict[str, Any]:
-    """Simulate ``scenario`` into the recording ``reference`` and diff ``accident`` against it:
-    the diff's JSON object (picklable: it may run in a worker)."""
-    from rocas.analysis.diff import diff
+def record_reference(scenario: Scenario, reference: Path) -> None:
+    """Simulate ``scenario`` into the recording ``reference`` (a picklable task: it may run in
+    a worker)."""
     from rocas.stacks.rollout import simulate
 
     simulate(scenario, output=reference)
-    return diff(accident, reference, delta_s=delta_s).to_json()
 
 
 def triggering_entity(scn: Any, mutation: Mutation) -> dict[str, Any]:

@@ -96,15 +96,11 @@ def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int =
     return out
 
 
-def prepare_worker(diffs: bool = False) -> None:
+def prepare_worker() -> None:
     """What a worker imports before its first task (see ``warm_up`` of
-    :class:`~rocas.search.executor.LocalExecutor`): the simulation, and with ``diffs`` the
-    differential analysis."""
+    :class:`~rocas.search.executor.LocalExecutor`): the simulation with the built-in ADS."""
     import rocas.ads.run  # noqa: F401
     import rocas.stacks.rollout  # noqa: F401
-
-    if diffs:
-        import rocas.analysis.diff  # noqa: F401
 
 
 def params_tuple(overrides: Mapping[str, float]) -> tuple[tuple[str, float], ...]:
