@@ -55,14 +55,16 @@ def analyze(
     label, digest = source_identity(source)
     own = executor is None
     ex = executor if executor is not None else make_executor(cfg.executor, cfg.workers)
-    _warm_up(ex, cfg)
     # the folders this call makes: removed again if nothing was finished in them
     made = [d for d in (out, *out.parents) if not d.exists()]
     state: dict[str, Any] = {"done": {}}
     try:
         state = prepare_run_dir(out, resume, label, cfg, digest)
+        _warm_up(ex, cfg)
         return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
     except BaseException:
+        if own:  # an interruption or an error: end the workers without waiting for their tasks
+            getattr(ex, "abort", ex.close)()
         if not state["done"]:  # the run's state, which each finished phase adds to
             remove_if_empty(made)
         raise

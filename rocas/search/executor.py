@@ -139,6 +139,11 @@ class LocalExecutor:
             for _ in range(self.workers):
                 pool.submit(fn)
 
+    def abort(self) -> None:
+        """End the workers at once, without waiting for the tasks under way or queued (those
+        :meth:`submit` or :meth:`warm_up` started): after an interruption or an error."""
+        self._stop_workers()
+
     def _stop_workers(self) -> None:
         """End the pool without waiting for the tasks under way (see the class docstring)."""
         pool, self._pool = self._pool, None

@@ -115,3 +115,16 @@ def test_submit_runs_a_task_on_a_worker_without_waiting_and_warm_up_starts_them(
     assert serial.done() and serial.result() == os.getpid()
     with pytest.raises(ValueError, match="here"):
         submit(SerialExecutor(), executor_tasks.fail, "here").result()
+
+
+def test_abort_ends_the_workers_without_waiting_for_a_submitted_task(tmp_path):
+    pool = LocalExecutor(workers=2)
+    job = pool.submit(executor_tasks.note_pid_and_sleep, (str(tmp_path), 60.0))
+    _wait_for(lambda: list(tmp_path.glob("pid-*")))
+    start = time.monotonic()
+    pool.abort()
+    assert time.monotonic() - start < 10  # not the task's 60 s
+    pid = int(next(tmp_path.glob("pid-*")).name.split("-")[1])
+    _wait_for(lambda: not os.path.exists(f"/proc/{pid}"))
+    assert job.done()
+    pool.close()  # nothing left to close
