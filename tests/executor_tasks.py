@@ -21,3 +21,12 @@ def note_pid_and_sleep(task: tuple[str, float]) -> int:
     while time.monotonic() < end:
         pass
     return os.getpid()
+
+
+def pid_of_worker() -> int:
+    """This process's id (which worker ran a task)."""
+    return os.getpid()
+
+
+def fail(message: str) -> None:
+    raise ValueError(message)

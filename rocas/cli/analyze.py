@@ -306,6 +306,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         accident_text,
         change,
         confidence_text,
+        regression_text,
         replay_text,
         robust_text,
         settings_text,
@@ -345,7 +346,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]
         t.add_row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
                   f"(original) vs {fixed:.0f} % (fixed)"
-                  + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else ""))
+                  + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else "")
+                  + (f"; {regression_text(v)}" if regression_text(v) else ""))
         t.add_row("robust value", robust_text(report, "->")
                   + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
     ss = report["search_space"]

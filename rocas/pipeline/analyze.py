@@ -60,14 +60,33 @@ def analyze(
     state: dict[str, Any] = {"done": {}}
     try:
         state = prepare_run_dir(out, resume, label, cfg, digest)
+        _warm_up(ex, cfg)
         return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
     except BaseException:
+        if own:  # an interruption or an error: end the workers without waiting for their tasks
+            getattr(ex, "abort", ex.close)()
         if not state["done"]:  # the run's state, which each finished phase adds to
             remove_if_empty(made)
         raise
     finally:
         if own:
             ex.close()
+
+
+def _warm_up(executor: Executor, cfg: AnalyzeConfig) -> None:
+    """Start the executor's workers (when it has some to start) while the replay runs, if the
+    analysis will use them: the confidence phase's alternate references, or a validation
+    whose waves give every worker PARALLEL_MIN_BATCH variants. Their start-up (a second or so
+    of imports each) then overlaps the replay instead of delaying the first phase that needs
+    them."""
+    from rocas.pipeline.evaluate import PARALLEL_MIN_BATCH, prepare_worker
+
+    warm_up = getattr(executor, "warm_up", None)
+    workers = max(1, getattr(executor, "workers", 1))
+    if warm_up is None or workers == 1:
+        return
+    if cfg.alternate_references or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH:
+        warm_up(prepare_worker)
 
 
 def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:

@@ -24,11 +24,14 @@ import json
 import shutil
 import time
 from collections import Counter
+from pathlib import Path
 from typing import Any
 
 from rocas._fs import atomic_path, write_text_atomic
 from rocas.pipeline.physical import apply_physical
 from rocas.pipeline.rundir import Run
+from rocas.scenarios.model import Scenario
+from rocas.search.executor import submit
 from rocas.search.space import Mutation
 
 #: the report's words for each substitution stance (rocas.pipeline.substitution)
@@ -95,7 +98,6 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     outweigh one reference. Otherwise the chosen reference's answer stands."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.substitution import second_opinion
-    from rocas.stacks.rollout import simulate
 
     if run.done("confidence"):
         return run.state["done"]["confidence"]
@@ -108,19 +110,26 @@ def phase_confidence(run: Run) -> dict[str, Any]:
                                       run.cfg.alternate_references)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
                 "module": chosen_diff["deviating_module"], "path": chosen_diff["path"]}]
-    diffs: list[Any] = [None]
-    for i, cand in enumerate(alternates, start=1):
-        path = run.out / f"reference_{i}.mcap"
-        simulate(apply_physical(scn, Mutation(dict(cand["mutation"]))), output=path)
-        found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s)
-        diffs.append(found)
-        answers.append({"reference": path.name, "mutation": cand["mutation"],
-                        "module": found.deviating_module, "path": found.to_json()["path"]})
-    simulations = len(alternates)
-    result: dict[str, Any] = {"answers": answers}
+    # each alternate reference is simulated on a worker of its own while this process asks
+    # module substitution: three independent simulations of half a second or so each; the
+    # diffs (a few hundredths of a second) are taken here, which spares the workers the
+    # differential analysis's imports
+    jobs = [submit(run.executor, record_reference, apply_physical(scn, Mutation(dict(cand["mutation"]))),
+                   run.out / f"reference_{i}.mcap") for i, cand in enumerate(alternates, start=1)]
     opinion = None
     if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
+    diffs: list[dict[str, Any] | None] = [None]
+    for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
+        job.result()
+        found = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
+                     delta_s=run.cfg.delta_s).to_json()
+        diffs.append(found)
+        answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
+                        "module": found["deviating_module"], "path": found["path"]})
+    simulations = len(alternates)
+    result: dict[str, Any] = {"answers": answers}
+    if opinion is not None:
         simulations += len(opinion.runs) + 1
     majority = agreement([a["module"] for a in answers])["majority"]
     adopted = 0
@@ -142,6 +151,14 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     return result
 
 
+def record_reference(scenario: Scenario, reference: Path) -> None:
+    """Simulate ``scenario`` into the recording ``reference`` (a picklable task: it may run in
+    a worker)."""
+    from rocas.stacks.rollout import simulate
+
+    simulate(scenario, output=reference)
+
+
 def triggering_entity(scn: Any, mutation: Mutation) -> dict[str, Any]:
     """The triggering entity of a reference, as the physical phase words it."""
     from rocas.pipeline.physical import describe, entity_kinds, mutated_entities, physical_space
@@ -153,13 +170,12 @@ def triggering_entity(scn: Any, mutation: Mutation) -> dict[str, Any]:
             "entities": entity, "properties": describe(space, mutation)}
 
 
-def _adopt(run: Run, answer: dict[str, Any], found: Any) -> None:
+def _adopt(run: Run, answer: dict[str, Any], data: dict[str, Any]) -> None:
     """Make ``answer``'s reference the analysis's reference (the files later phases, the
     report and the Rerun view read): its recording, already written, is copied over
     reference.mcap."""
     with atomic_path(run.out / "reference.mcap") as tmp:
         shutil.copyfile(run.out / answer["reference"], tmp)
-    data = found.to_json()
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
     run.state["done"]["diff"] = {"deviating_module": data["deviating_module"], "path": data["path"],
                                  "control_channel": data["control_channel"],

@@ -208,6 +208,21 @@ def sweep_text(validation: dict[str, Any]) -> str:
             "the values left out could not change it)")
 
 
+def regression_text(validation: dict[str, Any]) -> str:
+    """Where the regression test's sequential stop ended the original's runs, in words ('' when
+    the original ran on every variant)."""
+    test = validation.get("regression_test") or {}
+    if not test.get("stopped_early"):
+        return ""
+    better = test["decision"] == "fix_better"
+    return (f"the original stopped after {test['variants']} of {validation['variants']} variants: "
+            f"the fix {'avoids' if better else 'causes'} the accident in "
+            f"{test['fix_only'] if better else test['original_only']} of them where the original "
+            f"{'does not' if better else 'avoids it'}, and the reverse in "
+            f"{test['original_only'] if better else test['fix_only']} (sign test p = "
+            f"{test['p_value']:.2g}, level {test['alpha_per_look']:.2g} per look)")
+
+
 def markdown(report: dict[str, Any]) -> str:
     """The verdict as a markdown document (report.md, the Rerun verdict view)."""
     lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
@@ -242,7 +257,8 @@ def markdown(report: dict[str, Any]) -> str:
         lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "
                      f"{100 * v['success_rate_original']:.0f} % with the original configuration, "
                      f"{100 * v['success_rate_fixed']:.0f} % with the fix"
-                     + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else ""))
+                     + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else "")
+                     + (f"; {regression_text(v)}" if regression_text(v) else ""))
         lines.append(f"- **Robust value**: {robust_text(report)}"
                      + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
     t = report["timings_s"]

@@ -13,6 +13,7 @@ import numpy as np
 from rocas._fs import write_text_atomic
 from rocas.pipeline.evaluate import VariantTask, evaluate, is_accident, params_tuple
 from rocas.pipeline.rundir import Run
+from rocas.pipeline.sequential import looks, regression_test
 from rocas.scenarios.model import Scenario
 from rocas.search.objectives import ego_dissimilarity
 from rocas.search.space import MutationSpace
@@ -80,6 +81,11 @@ def stronger_fixes(fix: Mapping[str, float], space: MutationSpace
 #: simulations of phase V per slice, in batches (of AnalyzeConfig.batch_size) per worker: after
 #: each slice the progress bar advances and the finished simulations are checkpointed
 VALIDATION_SLICE_BATCHES = 1
+#: stronger values run on the variants together, in one wave of simulations: the second is
+#: run before the first's rate says whether it is needed (when it is not, its simulations are
+#: spent for nothing, but two values in one wave fill both cores of a small machine at a
+#: batch size where each core runs near its best throughput)
+SWEEP_VALUES_PER_WAVE = 2
 
 
 def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dict[str, Any]:
@@ -88,17 +94,26 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     (STRONGER_FRACTIONS), each stronger value run on the accident (it must still avoid it and
     keep the ego's earlier trajectory, h1) and, closest first, on the same variants.
 
+    The original runs on the variants in looks (:mod:`rocas.pipeline.sequential`) and stops
+    as soon as the minimal fix and the original are separated with confidence (a paired exact
+    sign test, its level split over the looks); its success rate is then over the variants
+    run (``original_variants``) and ``regression_test`` says where and why it stopped.
+
     The sweep stops as soon as its answer is settled, which gives the same robust value as
     running every stronger value (see :func:`sweep_settled`): a stronger value that fails on
     the accident is not a candidate and is not run on the variants, and once one value is
     certain to be the robust one (or the minimal fix certain to be robust enough) the values
     beyond it are left out. The report lists them with ``"skipped"`` and the reason.
 
-    The simulations run in slices (VALIDATION_SLICE_BATCHES batches per worker); after each, the
-    progress callback gets the running count (``evaluations``) and the most simulations the
-    phase can still take (``simulations``), and what the finished ones found (accident or not,
-    and h1 where the sweep needs it) is written to ``validation.ckpt``, so a resumed run goes on
-    after the last finished slice. Results do not depend on the slicing."""
+    The simulations run in waves, each as few large batches as the executor's workers allow:
+    the stronger values on the accident, the minimal fix on every variant and the original's
+    first look; then the original's next look (while undecided) with the next
+    SWEEP_VALUES_PER_WAVE stronger values still to run. Each wave runs in slices
+    (VALIDATION_SLICE_BATCHES batches per worker); after each, the progress callback gets the
+    running count (``evaluations``) and the most simulations the phase can still take
+    (``simulations``), and what the finished ones found (accident or not, and h1 where the
+    sweep needs it) is written to ``validation.ckpt``, so a resumed run goes on after the last
+    finished slice. Results do not depend on the slicing."""
     if run.done("validation"):
         return run.state["done"]["validation"]
     t0 = time.perf_counter()
@@ -109,28 +124,53 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     configs = [params_tuple(values) for _, values in stronger]
     found = _validation_checkpoint(run.out / "validation.ckpt", fix, n)
     sims = _Simulations(run, found, planned=validation_simulations(n, len(stronger)))
+    schedule = looks(n)
+    original = [VariantTask(v, (), v.seed) for v in variants]
 
-    # the stronger values on the accident itself, then the original and the minimal fix on the variants
-    on_accident = sims.run([VariantTask(run.scenario, c, run.scenario.seed) for c in configs],
-                           h1_of=range(len(configs)))
+    first = sims.run([VariantTask(run.scenario, c, run.scenario.seed) for c in configs]
+                     + [VariantTask(v, params_tuple(fix), v.seed) for v in variants]
+                     + original[:schedule[0] if n else 0], h1_of=range(len(configs)))
+    on_accident, fixed_acc, orig_acc = (first[:len(configs)], first[len(configs):len(configs) + n],
+                                        first[len(configs) + n:])
     h1 = [found["h1_m2"][str(i)] for i in range(len(configs))]
     valid = [not acc and h <= run.cfg.h1_limit_m2 for acc, h in zip(on_accident, h1, strict=True)]
     sims.planned -= n * valid.count(False)
-    runs = sims.run([VariantTask(v, (), v.seed) for v in variants]
-                    + [VariantTask(v, params_tuple(fix), v.seed) for v in variants])
-    ok_orig, ok_fixed = (_rate(runs[:n]), _rate(runs[n:])) if n else (None, None)
+    ok_fixed = _rate(fixed_acc) if n else None
+    fixed_ok = [not a for a in fixed_acc]
 
     rates: list[float | None] = [None] * len(configs)
     skipped: list[str | None] = [None if ok else "it does not avoid the accident or it changes "
                                  "the ego's trajectory before it" for ok in valid]
-    for k, params in enumerate(configs):
-        if not valid[k]:
-            continue
-        if sweep_settled(ok_fixed, [r for r in rates[:k] if r is not None]):
-            skipped[k] = "the robust value was settled by the closer values"
-            sims.planned -= n
-            continue
-        rates[k] = _rate(sims.run([VariantTask(v, params, v.seed) for v in variants]))
+    test = regression_test([not a for a in orig_acc], fixed_ok, n) if n else None
+    if test is not None and test["stopped_early"]:
+        sims.planned -= n - len(orig_acc)
+    k = 0
+    while True:
+        more = []
+        if test is not None and test["decision"] is None and len(orig_acc) < n:
+            more = original[len(orig_acc):schedule[schedule.index(len(orig_acc)) + 1]]
+        arms: list[int] = []
+        while k < len(configs) and len(arms) < SWEEP_VALUES_PER_WAVE:
+            if valid[k] and not arms and sweep_settled(ok_fixed, [r for r in rates if r is not None]):
+                for j in range(k, len(configs)):
+                    if valid[j]:
+                        skipped[j] = "the robust value was settled by the closer values"
+                        sims.planned -= n
+                k = len(configs)
+                break
+            if valid[k]:
+                arms.append(k)
+            k += 1
+        if not more and not arms:
+            break
+        wave = sims.run(more + [VariantTask(v, configs[j], v.seed) for j in arms for v in variants])
+        orig_acc = orig_acc + wave[:len(more)]
+        for i, j in enumerate(arms):
+            rates[j] = _rate(wave[len(more) + i * n:len(more) + (i + 1) * n])
+        if more:
+            test = regression_test([not a for a in orig_acc], fixed_ok, n)
+            if test["stopped_early"]:
+                sims.planned -= n - len(orig_acc)
     sims.report()
     sweep = []
     for k, (f, values) in enumerate(stronger):
@@ -139,8 +179,14 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
         if skipped[k]:
             entry["skipped"] = skipped[k]
         sweep.append(entry)
-    result = {"variants": n, "success_rate_original": ok_orig, "success_rate_fixed": ok_fixed,
-              "fix_makes_it_worse": bool(n and ok_fixed < ok_orig),  # type: ignore[operator]
+    ok_orig = _rate(orig_acc) if n else None
+    if test is not None and test["stopped_early"]:
+        worse = test["decision"] == "fix_worse"
+    else:
+        worse = bool(n and ok_fixed < ok_orig)  # type: ignore[operator]
+    result = {"variants": n, "success_rate_original": ok_orig, "original_variants": len(orig_acc),
+              "success_rate_fixed": ok_fixed, "fix_makes_it_worse": worse,
+              "regression_test": test,
               "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2),
               "simulations": sims.done, "simulations_without_stopping": validation_simulations(
                   n, len(stronger))}
@@ -221,7 +267,7 @@ def _validation_checkpoint(path: Path, fix: Mapping[str, float], variants: int) 
     simulation; ``h1_m2``: task index -> h1 of the stronger values' runs on the accident); empty
     when there is no checkpoint, or one of another fix, size or format (then it is started
     afresh: the order of the tasks follows from the results, so a prefix is all there is)."""
-    fresh = {"format": 2, "fix": dict(fix), "variants": variants, "accident": [], "h1_m2": {}}
+    fresh = {"format": 3, "fix": dict(fix), "variants": variants, "accident": [], "h1_m2": {}}
     if not path.exists():
         return fresh
     try:

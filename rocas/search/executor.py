@@ -118,6 +118,32 @@ class LocalExecutor:
             raise
         return out
 
+    def submit(self, fn: Callable[..., R], *args: Any) -> Future[R]:
+        """Start ``fn(*args)`` in a worker and return at once (the pool starts if it has not);
+        with one worker it runs here before this returns. An exception is raised by the
+        future's ``result()``."""
+        if self.workers == 1:
+            return done_future(fn, *args)
+        pool = self._get_pool()
+        with _stop_signals_held():  # a submission may start a worker
+            return pool.submit(fn, *args)
+
+    def warm_up(self, fn: Callable[[], Any]) -> None:
+        """Start the workers now and have each run ``fn`` (its imports, say) without waiting
+        for them, so that the first :meth:`map` or :meth:`submit` that needs them does not
+        wait for their start-up. Nothing with one worker."""
+        if self.workers == 1:
+            return
+        pool = self._get_pool()
+        with _stop_signals_held():
+            for _ in range(self.workers):
+                pool.submit(fn)
+
+    def abort(self) -> None:
+        """End the workers at once, without waiting for the tasks under way or queued (those
+        :meth:`submit` or :meth:`warm_up` started): after an interruption or an error."""
+        self._stop_workers()
+
     def _stop_workers(self) -> None:
         """End the pool without waiting for the tasks under way (see the class docstring)."""
         pool, self._pool = self._pool, None
@@ -141,6 +167,23 @@ class LocalExecutor:
     def __exit__(self, et: type[BaseException] | None, e: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.close()
+
+
+def done_future(fn: Callable[..., R], *args: Any) -> Future[R]:
+    """``fn(*args)`` run here, as a finished future (its result or its exception)."""
+    f: Future[R] = Future()
+    try:
+        f.set_result(fn(*args))
+    except Exception as exc:  # noqa: BLE001  (handed to whoever asks for the result)
+        f.set_exception(exc)
+    return f
+
+
+def submit(executor: Executor, fn: Callable[..., R], *args: Any) -> Future[R]:
+    """``fn(*args)`` started on ``executor`` when it can run one task apart from the others
+    (``submit``, as :class:`LocalExecutor`), else run here at once; as a future."""
+    start = getattr(executor, "submit", None)
+    return start(fn, *args) if start is not None else done_future(fn, *args)
 
 
 def _start_resource_tracker_quietly() -> None:

@@ -3,12 +3,14 @@ not a test).
 
 Each entry's recording is analysed at default settings (``--workers`` and ``--validation`` can
 be set), once per repeat, by this checkout and, with ``--baseline REF``, by the code of git
-revision REF (checked out into a temporary worktree and run with ``PYTHONPATH`` pointing at it,
-in the same environment). The two alternate entry by entry, so that a change of load on a
-shared machine touches both. Printed per entry: wall and CPU time (user + system of the process
-and its workers, which a shared machine disturbs less), peak RSS, the answer (module and
-parameter) of each side; then the median over the entries, min and median per entry, and the
-ratios (target of issue #24: a median of at most 10 s wall on 2 cores).
+revision REF (extracted with ``git archive`` into a temporary directory and run with
+``PYTHONPATH`` pointing at it, in the same environment). The two alternate entry by entry, so
+that a change of load on a shared machine touches both. Printed per entry: wall and CPU time
+(min over the repeats; CPU is user + system of the process and its workers, which a shared
+machine disturbs less), peak RSS, the answer (verdict, module and parameter) of each side; then
+per side the median over the entries of each entry's min and of each entry's median, the
+median time of each phase (report.json ``timings_s``), the ratios, and the load average
+(target of issue #24: a median of at most 10 s wall on 2 cores).
 
 Usage: python tests/benchmarks/bench_analyze.py [--entries a01,a09] [--repeat 1]
            [--baseline REF] [--workers N] [--validation K]
@@ -69,8 +71,9 @@ def main() -> None:
     worktree = None
     if args.baseline:
         worktree = Path(tempfile.mkdtemp(prefix="rocas-baseline-"))
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
-                        args.baseline], check=True, capture_output=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "rocas"],
+                                 check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(worktree)], input=archive, check=True)
         sides = {"baseline": str(worktree), "current": str(ROOT)}
     for side, path in sides.items():  # each side must import its own code
         where = subprocess.run([sys.executable, "-c", "import rocas; print(rocas.__file__)"], cwd=path,
@@ -79,6 +82,7 @@ def main() -> None:
             raise SystemExit(f"{side}: rocas imported from {where.stdout.strip()!r}, not {path}")
     runs: dict[str, dict[str, list[tuple[float, float, float]]]] = {s: {} for s in sides}
     answers: dict[str, dict[str, str]] = {s: {} for s in sides}
+    phases: dict[str, dict[str, list[float]]] = {s: {} for s in sides}
     try:
         for rec in recs:
             for _ in range(args.repeat):
@@ -86,6 +90,8 @@ def main() -> None:
                     wall, cpu, rss, report = analyze_once(rec, extra, path)
                     runs[side].setdefault(rec.stem, []).append((wall, cpu, rss))
                     answers[side][rec.stem] = answer(report)
+                    for phase, t in (report.get("timings_s") or {}).items():
+                        phases[side].setdefault(phase, []).append(t)
             line = "  ".join(f"{side}: wall {min(r[0] for r in runs[side][rec.stem]):6.1f} s "
                              f"cpu {min(r[1] for r in runs[side][rec.stem]):6.1f} s "
                              f"rss {max(r[2] for r in runs[side][rec.stem]):5.0f} MB "
@@ -93,8 +99,6 @@ def main() -> None:
             print(f"{rec.stem[:28]:28s} {line}", flush=True)
     finally:
         if worktree is not None:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(worktree)],
-                           capture_output=True)
             shutil.rmtree(worktree, ignore_errors=True)
     print(f"\n{len(recs)} entries, {args.repeat} run(s) each, settings: {' '.join(extra) or 'defaults'}")
     medians = {}
@@ -102,8 +106,14 @@ def main() -> None:
         walls = [min(r[0] for r in v) for v in runs[side].values()]
         cpus = [min(r[1] for r in v) for v in runs[side].values()]
         medians[side] = (statistics.median(walls), statistics.median(cpus))
+        mid_walls = [statistics.median(r[0] for r in v) for v in runs[side].values()]
+        mid_cpus = [statistics.median(r[1] for r in v) for v in runs[side].values()]
         print(f"{side:9s} median over entries (of each entry's min): wall {medians[side][0]:.1f} s, "
               f"cpu {medians[side][1]:.1f} s; min wall {min(walls):.1f} s, max wall {max(walls):.1f} s")
+        print(f"{'':9s} median over entries (of each entry's median): wall "
+              f"{statistics.median(mid_walls):.1f} s, cpu {statistics.median(mid_cpus):.1f} s")
+        print(f"{'':9s} median phase wall [s]: " + ", ".join(
+            f"{k} {statistics.median(v):.2f}" for k, v in phases[side].items()))
     if "baseline" in sides:
         b, c = medians["baseline"], medians["current"]
         print(f"speed-up of the median: wall {b[0] / c[0]:.2f}x, cpu {b[1] / c[1]:.2f}x")

@@ -106,12 +106,12 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
 
     with pytest.raises(KeyboardInterrupt):
         analyze(red_truck, out, cfg, executor=SerialExecutor(), progress=stop_in_validation)
-    # slices of 8: the 5 stronger values on the accident, then the 24 variant runs of the
-    # original and the minimal fix
+    # slices of 8 of the first wave: the 5 stronger values on the accident, the minimal fix
+    # on the 12 variants and the original on its first (and only) look of 12
     answer, *counts = counts
     assert answer["module"] == "perception" and answer["fix"].startswith("perception.")
-    assert counts == [0, 5, 13]
-    assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 13
+    assert counts == [0, 8, 16]
+    assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 16
 
     # the same run without the interruption: phases I-IV as they were, the validation whole
     whole_dir = tmp_path / "whole"
@@ -124,10 +124,10 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
                     else None)
     total = whole["evaluations"]["validation"]
     assert total == whole["validation"]["simulations"] <= validation_simulations(12) == 89
-    assert counts[:4] == [(0, 89), (5, 89), (13, 89), (21, 89)]  # the bar advances slice by slice
+    assert counts[:4] == [(0, 89), (8, 89), (16, 89), (24, 89)]  # the bar advances slice by slice
     assert counts[-1] == (total, total)  # and ends at what was run
 
-    # resumed with other slices (the results do not depend on them), from the 14th simulation
+    # resumed with other slices (the results do not depend on them), from the 17th simulation
     import rocas.pipeline.validation as validation
 
     monkeypatch.setattr(validation, "VALIDATION_SLICE_BATCHES", 2)  # slices of 16
@@ -135,7 +135,7 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
     resumed = analyze(red_truck, out, cfg, executor=SerialExecutor(), resume=True,
                       progress=lambda phase, info: counts.append(info.get("evaluations"))
                       if phase == "validation" else None)
-    assert counts[0] == 13 and counts[1] == 29
+    assert counts[0] == 16 and counts[1] == 29  # the first wave's end: 16 + 13
     assert {k: v for k, v in resumed.items() if k not in ("timings_s", "settings")} == \
         {k: v for k, v in whole.items() if k not in ("timings_s", "settings")}
     assert json.loads((out / "validation.json").read_text()) == whole["validation"]

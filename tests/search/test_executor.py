@@ -97,3 +97,34 @@ def test_a_worker_starts_watching_its_parent_before_any_heavy_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == ""
+
+
+def test_submit_runs_a_task_on_a_worker_without_waiting_and_warm_up_starts_them():
+    from rocas.search.executor import submit
+
+    with LocalExecutor(workers=2) as pool:
+        pool.warm_up(executor_tasks.pid_of_worker)
+        assert len(pool._get_pool()._processes) == 2  # started before any map or submit
+        job = submit(pool, executor_tasks.pid_of_worker)
+        assert job.result(timeout=60) != os.getpid()
+        with pytest.raises(ValueError, match="boom"):
+            submit(pool, executor_tasks.fail, "boom").result(timeout=60)
+    # with one worker, or an executor that cannot submit, the task runs here at once
+    assert LocalExecutor(workers=1).submit(executor_tasks.pid_of_worker).result() == os.getpid()
+    serial = submit(SerialExecutor(), executor_tasks.pid_of_worker)
+    assert serial.done() and serial.result() == os.getpid()
+    with pytest.raises(ValueError, match="here"):
+        submit(SerialExecutor(), executor_tasks.fail, "here").result()
+
+
+def test_abort_ends_the_workers_without_waiting_for_a_submitted_task(tmp_path):
+    pool = LocalExecutor(workers=2)
+    job = pool.submit(executor_tasks.note_pid_and_sleep, (str(tmp_path), 60.0))
+    _wait_for(lambda: list(tmp_path.glob("pid-*")))
+    start = time.monotonic()
+    pool.abort()
+    assert time.monotonic() - start < 10  # not the task's 60 s
+    pid = int(next(tmp_path.glob("pid-*")).name.split("-")[1])
+    _wait_for(lambda: not os.path.exists(f"/proc/{pid}"))
+    assert job.done()
+    pool.close()  # nothing left to close
