@@ -16,6 +16,10 @@ The verdict on the answer:
 - ``contested``: one of the two supports it: more than half of the references but substitution
   disagrees, or substitution but not more than half of the references;
 - ``unstable``: neither does: do not act on the answer alone.
+
+An answer Algorithm 1 found without a change point on the control channel (its fallback,
+:mod:`rocas.analysis.pinpoint`) is at most ``contested``: it rests on the earliest departure
+among the modules the commands depend on, not on a walk back from the commands' own change.
 """
 
 from __future__ import annotations
@@ -78,11 +82,12 @@ def agreement(modules: list[str | None], reported: int = 0) -> dict[str, Any]:
 _SUPPORTS = ("agrees", "consistent")
 
 
-def level(agree: dict[str, Any], stance: str | None) -> str:
-    """stable / contested / unstable (see the module docstring)."""
+def level(agree: dict[str, Any], stance: str | None, fallback: bool = False) -> str:
+    """stable / contested / unstable (see the module docstring); ``fallback``: the reported
+    answer came from Algorithm 1's fallback."""
     majority = 2 * agree["same"] > agree["runs"]
     supported = stance in _SUPPORTS
-    if majority and (supported or stance is None):
+    if majority and (supported or stance is None) and not fallback:
         return "stable"
     if majority or supported:
         return "contested"
@@ -109,7 +114,8 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     alternates = alternate_references(physical.get("front", []), physical["chosen"],
                                       run.cfg.alternate_references)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
-                "module": chosen_diff["deviating_module"], "path": chosen_diff["path"]}]
+                "module": chosen_diff["deviating_module"], "path": chosen_diff["path"],
+                "fallback": chosen_diff.get("fallback")}]
     # each alternate reference is simulated on a worker of its own while this process asks
     # module substitution: three independent simulations of half a second or so each; the
     # diffs (a few hundredths of a second) are taken here, which spares the workers the
@@ -126,7 +132,8 @@ def phase_confidence(run: Run) -> dict[str, Any]:
                      delta_s=run.cfg.delta_s).to_json()
         diffs.append(found)
         answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
-                        "module": found["deviating_module"], "path": found["path"]})
+                        "module": found["deviating_module"], "path": found["path"],
+                        "fallback": found["fallback"]})
     simulations = len(alternates)
     result: dict[str, Any] = {"answers": answers}
     if opinion is not None:
@@ -145,7 +152,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     if opinion is not None:
         stance = opinion.stance(agree["module"])
         result["second_opinion"] = {**opinion.to_dict(), "stance": stance}
-    result["level"] = level(agree, stance)
+    result["level"] = level(agree, stance, fallback=bool(answers[adopted].get("fallback")))
     result["note"] = note(result)
     run.finish("confidence", result, time.perf_counter() - t0, simulations)
     return result
@@ -204,6 +211,9 @@ def note(result: dict[str, Any]) -> str:
         text += f"; {_STANCE_WORDS[second['stance']]}"
         if second["stance"] == "disagrees" and second.get("module"):
             text += f" ({second['module']})"
+    if result["answers"][result.get("adopted", 0)].get("fallback"):
+        text += ("; found without a change point on the control channel (Algorithm 1's "
+                 "fallback), so at most contested")
     if result["level"] == "unstable":
         text += (". Unstable: neither most references nor module substitution support it; "
                  "do not act on it alone")

@@ -41,6 +41,19 @@ def test_level():
     assert level({"runs": 3, "same": 1}, "consistent") == "contested"
     assert level({"runs": 2, "same": 1}, "disagrees") == "unstable"
     assert level({"runs": 3, "same": 1}, None) == "unstable"
+    # an answer from Algorithm 1's fallback (no change point on the control channel)
+    assert level({"runs": 3, "same": 3}, "agrees", fallback=True) == "contested"
+    assert level({"runs": 3, "same": 1}, None, fallback=True) == "unstable"
+
+
+def test_the_note_says_when_the_answer_came_from_the_fallback():
+    answers = [{"reference": "reference.mcap", "module": "perception",
+                "fallback": "/control has no change point (...)"}]
+    result = {"agreement": agreement(["perception"]), "answers": answers, "adopted": 0,
+              "level": "contested"}
+    assert "without a change point on the control channel" in note(result)
+    answers[0]["fallback"] = None
+    assert "without a change point" not in note(result)
 
 
 def test_the_note_says_what_was_adopted_and_what_substitution_says():
