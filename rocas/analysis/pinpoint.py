@@ -142,30 +142,32 @@ def find_initial_module(
             reason = f"t*({u[1]}) = {tu:g} s is outside [{tv - delta_s:g}, {tv:g}] s"
         removed.append(RemovedEdge(u, v, reason))
 
-    # the reversed pruned graph: upstream[v] lists the kept edges' sources in node order,
-    # downstream[u] their targets in edge order
-    gone = {(e.source, e.target) for e in removed}
-    upstream: dict[Node, list[Node]] = {n: [] for n in succ}
-    downstream: dict[Node, list[Node]] = {}
-    for u, outs in succ.items():
-        downstream[u] = [v for v in outs if (u, v) not in gone]
-        for v in downstream[u]:
-            upstream[v].append(u)
     start: Node = (CHANNEL, control_channel)
     fallback: str | None = None
     if start in succ and t_star[start] is None:
-        # no change point on the control channel: start from everything it depends on
-        upstream = {n: [] for n in succ}
-        downstream = {u: list(outs) for u, outs in succ.items()}
-        for u, outs in succ.items():
-            for v in outs:
-                upstream[v].append(u)
         fallback = (f"{control_channel} has no change point (its messages "
                     + (f"differ from {control_onset_s:g} s on" if control_onset_s is not None
                        else "are the same in both recordings")
                     + "), so the walk starts from every module it depends on"
                     + (f" that departs within [{control_onset_s - delta_s:g}, "
                        f"{control_onset_s:g}] s" if control_onset_s is not None else ""))
+
+    def explains(tm: float) -> bool:
+        """Whether a module departing at ``tm`` can explain the commands (the fallback's
+        window before their first difference; always, on the paper's walk)."""
+        return (not fallback or control_onset_s is None
+                or control_onset_s - delta_s <= tm <= control_onset_s)
+
+    # the reversed graph, pruned unless the walk has no start (the fallback walks it whole):
+    # upstream[v] lists the kept edges' sources in node order, downstream[u] their targets in
+    # edge order
+    gone = set() if fallback else {(e.source, e.target) for e in removed}
+    upstream: dict[Node, list[Node]] = {n: [] for n in succ}
+    downstream: dict[Node, list[Node]] = {}
+    for u, outs in succ.items():
+        downstream[u] = [v for v in outs if (u, v) not in gone]
+        for v in downstream[u]:
+            upstream[v].append(u)
     depth = _depths(upstream, start) if start in succ else {}
     # a module that reads the control channel reports the vehicle's response to it (the
     # chassis): without a change point on that channel, its deviation may be the commands'
@@ -174,9 +176,7 @@ def find_initial_module(
     candidates = [
         (tm, -depth.get((MODULE, m), 0), m)
         for m in reachable
-        if (tm := t_star[(MODULE, m)]) is not None and (
-            not fallback or control_onset_s is None
-            or control_onset_s - delta_s <= tm <= control_onset_s)
+        if (tm := t_star[(MODULE, m)]) is not None and explains(tm)
     ]
     deviating = min(candidates)[2] if candidates else None
 
@@ -190,8 +190,7 @@ def find_initial_module(
         tm = t_star[(MODULE, m)]
         if m == deviating or tm is None:
             continue
-        if m in reachable and fallback and control_onset_s is not None and not (
-                control_onset_s - delta_s <= tm <= control_onset_s):
+        if m in reachable and not explains(tm):
             exclusions[m] = (f"its change point ({_fmt(tm)}) is outside "
                              f"[{control_onset_s - delta_s:g}, {control_onset_s:g}] s, the window "
                              f"before {control_channel} first differs")
