@@ -244,7 +244,7 @@ def markdown(report: dict[str, Any]) -> str:
         lines.append(f"- **Deviating module**: {report['deviating_module']} "
                      f"(walk: {' → '.join(report['path'])})")
         if report.get("walk_fallback"):
-            lines.append(f"  - {report['walk_fallback'][:1].upper()}{report['walk_fallback'][1:]}.")
+            lines.append(f"  - {report['walk_fallback']}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:
