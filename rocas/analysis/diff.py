@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -57,6 +58,9 @@ class ChannelDiff:
         mdr_after: mean MDR from t* on; None without t*.
         only_in: "accident"/"reference" for a channel present in one recording only.
         schema: the schema name.
+        entered_s: when content entered the channel in both runs at once, the two runs being
+            the same until then (:func:`entries_to_pass`) [s]; None otherwise.
+        after_entry: the change points found from that bin on (None without an entry).
     """
 
     topic: str
@@ -68,6 +72,8 @@ class ChannelDiff:
     mdr_after: float | None
     only_in: str | None
     schema: str
+    entered_s: float | None = None
+    after_entry: ChangePoints | None = None
 
     @property
     def change_point_s(self) -> float | None:
@@ -86,6 +92,8 @@ class DiffResult:
         bin_s: bin width [s]; delta_s: Algorithm 1's window [s].
         messages_read: decoded messages (accident, reference).
         warnings: damage and skips found while reading, one line each.
+        entries: Algorithm 1's result with the departures where content entered both runs
+            passed over (:func:`entries_to_pass`), when there were any; None otherwise.
     """
 
     accident: str
@@ -97,6 +105,7 @@ class DiffResult:
     delta_s: float
     messages_read: tuple[int, int]
     warnings: tuple[str, ...] = field(default=())
+    entries: PinpointResult | None = None
 
     @property
     def deviating_module(self) -> str | None:
@@ -133,6 +142,9 @@ class DiffResult:
                     "schema": c.schema,
                     "change_point_s": c.change_point_s,
                     "change_points_s": list(c.change_points.times_s),
+                    "entered_s": c.entered_s,
+                    "change_point_after_entry_s": (c.after_entry.first_s
+                                                   if c.after_entry is not None else None),
                     "mdr_before": c.mdr_before,
                     "mdr_after": c.mdr_after,
                     "only_in": c.only_in,
@@ -155,10 +167,96 @@ class DiffResult:
                 {"from": e.source[1], "to": e.target[1], "reason": e.reason}
                 for e in p.removed_edges
             ],
+            "entries": None if self.entries is None else {
+                "deviating_module": self.entries.deviating_module,
+                "path": list(self.entries.path),
+                "fallback": self.entries.fallback,
+                "channels": {c.topic: c.entered_s for c in self.channels
+                             if c.entered_s is not None},
+            },
             "messages_read": {"accident": self.messages_read[0],
                               "reference": self.messages_read[1]},
             "warnings": list(self.warnings),
         }
+
+
+#: Longest a module takes to pass on content that entered its input [s]: about two cycles of
+#: a 10 Hz pipeline. A module whose output gains elements later than this has decided
+#: something (a planner's decision about an obstacle it has seen for a while), which is a
+#: departure like any other.
+ENTRY_LAG_S = 0.2
+
+
+def entries_to_pass(
+    series: dict[str, ChannelSeries], graph: ChannelModuleGraph
+) -> dict[str, int]:
+    """The channels whose first difference is content entering both runs, and the bin it
+    entered at (an index into the channel's series).
+
+    Two runs that differ in an entity differ on a channel from the moment that entity is in
+    it. When it is there from the first message, the difference is the series' level from
+    the start, and no change point marks it (the paper's premise: the first seconds are the
+    baseline). When it comes into view later (an obstacle entering perception's range in
+    both runs at the same tick, a bus in one and a truck in the other), the two executions
+    are the same up to that tick, and the series steps up there. That step is the same
+    difference met later: the executions' common start, not a module departing from the
+    other run. So an entry (:attr:`ChannelSeries.entered` at the channel's first differing
+    bin) is passed over, and the channel's change points are found from it on
+    (:func:`change_points_from`), when it is the executions' first difference (no channel
+    differs in an earlier bin), or when it follows, within :data:`ENTRY_LAG_S`, an entry
+    passed over on a channel its writer reads (the entry travelling down the pipeline).
+    Once a channel has differed in another way, no later entry is passed over.
+
+    Returns:
+        topic -> index of the bin where content entered it.
+    """
+    firsts: list[tuple[float, str, int | None]] = []
+    for topic, s in series.items():
+        differing = np.flatnonzero(s.mdr > 0)
+        if len(differing) == 0:
+            continue
+        k = int(differing[0])
+        entry = k if s.entered is not None and bool(s.entered[k]) else None
+        firsts.append((float(s.times_s[k]), topic, entry))
+    if not firsts:
+        return {}
+    firsts.sort()
+    start = firsts[0][0]
+    # the first difference that is not an entry ends the common start
+    stop = min((t for t, _, entry in firsts if entry is None), default=math.inf)
+    passed: dict[str, int] = {}
+    passed_at: dict[str, float] = {}
+    for t, topic, entry in firsts:
+        if entry is None or t > stop:
+            continue
+        topo = graph.topology.get(topic)
+        writers = set(topo.writers) if topo else set()
+        inputs = [c for c, tp in graph.topology.items() if writers & set(tp.readers)]
+        if t == start or any(
+            c in passed_at and t - passed_at[c] <= ENTRY_LAG_S + 1e-9 for c in inputs
+        ):
+            passed[topic] = entry
+            passed_at[topic] = t
+    return passed
+
+
+def entries_text(channels: dict[str, float], module: str | None) -> str:
+    """One sentence on the departures passed over (``channels``: topic -> entry time [s]) and
+    what the walk names without them."""
+    parts = [f"{t} at {at:.2f} s" for t, at in sorted(channels.items(), key=lambda x: (x[1], x[0]))]
+    return (f"content entered both runs and began to differ on {', '.join(parts)}, the runs "
+            "being the same until then; with those departures passed over as the runs' common "
+            f"start, the walk names {module or 'no module'}")
+
+
+def change_points_from(s: ChannelSeries, cfg: ChangePointConfig, start: int) -> ChangePoints:
+    """The change points of ``s`` found on its bins from index ``start`` on (indices into the
+    whole series; the baseline window starts at that bin)."""
+    if start == 0:
+        return detect(s.mdr, s.times_s, cfg)
+    cps = detect(s.mdr[start:], s.times_s[start:], cfg)
+    return ChangePoints(cps.times_s, tuple(start + i for i in cps.indices), cps.penalty,
+                        cps.noise_std)
 
 
 def _means(values: np.ndarray, cps: ChangePoints) -> tuple[float | None, float | None]:
@@ -310,10 +408,16 @@ def diff(
 
     rows: list[ChannelDiff] = []
     t_star: dict[str, float | None] = {}
+    entries = entries_to_pass(res.series, graph)
+    t_after: dict[str, float | None] = {}
     for topic, s in res.series.items():
         cps = detect(s.mdr, s.times_s, cfg)
-        t_star[topic] = cps.first_s
-        before, after = _means(s.mdr, cps)
+        t_star[topic] = t_after[topic] = cps.first_s
+        entry = entries.get(topic)
+        after = None if entry is None else change_points_from(s, cfg, entry)
+        if after is not None:
+            t_after[topic] = after.first_s
+        before, after_mean = _means(s.mdr, cps)
         topo = graph.topology.get(topic)
         rows.append(
             ChannelDiff(
@@ -323,17 +427,20 @@ def diff(
                 series=s,
                 change_points=cps,
                 mdr_before=before,
-                mdr_after=after,
+                mdr_after=after_mean,
                 only_in=s.only_in,
                 schema=_schema_name(res.channels[topic]),
+                entered_s=None if entry is None else float(s.times_s[entry]),
+                after_entry=after,
             )
         )
     ctrl_series = res.series.get(ctrl)
     differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
-    pin = find_initial_module(
-        graph, t_star, ctrl, delta_s,
-        control_onset_s=float(ctrl_series.times_s[differing[0]]) if len(differing) else None,
-    )
+    onset = float(ctrl_series.times_s[differing[0]]) if len(differing) else None
+    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset)
+    pin_entries = None
+    if entries:
+        pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note
@@ -358,6 +465,7 @@ def diff(
         delta_s=delta_s,
         messages_read=res.messages_read,
         warnings=warnings,
+        entries=pin_entries,
     )
 
 

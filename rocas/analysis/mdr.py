@@ -391,3 +391,23 @@ def mdr(a: Any, b: Any, tol: Tolerance = EXACT) -> float:
     if _is_ros2(a) or _is_ros2(b):
         return 1.0
     return _json(a, b, tol)
+
+
+def repeated_lengths(message: Any) -> tuple[int, ...]:
+    """The lengths of a decoded message's top-level repeated fields, in declaration order: how
+    many elements (obstacles, lights, points) the message holds, which :mod:`series` compares
+    from bin to bin to see content enter both runs at once.
+
+    A protobuf message gives its repeated and map fields, a ROS 2 message its list and array
+    fields, a JSON object its arrays (keys sorted); anything else has none (``()``).
+    """
+    if isinstance(message, Message):
+        plan = _plan_for_class(type(message))
+        return tuple(len(getattr(message, f.name)) for f in plan.fields
+                     if f.kind in (_REP_SCALAR, _REP_FLOAT, _REP_MESSAGE, _MAP))
+    if _is_ros2(message):
+        return tuple(len(v) for k in _ros2_fields(type(message))
+                     if isinstance(v := getattr(message, k), (list, np.ndarray)))
+    if isinstance(message, dict):
+        return tuple(len(message[k]) for k in sorted(message) if isinstance(message[k], list))
+    return ()

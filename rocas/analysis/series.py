@@ -43,7 +43,7 @@ import numpy as np
 from google.protobuf import descriptor_pb2
 from google.protobuf.message import DecodeError
 
-from rocas.analysis.mdr import EXACT, Tolerance, mdr
+from rocas.analysis.mdr import EXACT, Tolerance, mdr, repeated_lengths
 from rocas.errors import RecordingError
 from rocas.recording.reader import ChannelInfo, Recording
 
@@ -64,6 +64,11 @@ class ChannelSeries:
         mdr: (n,) MDR of each such bin, in [0, 1].
         messages: (n, 2) message counts per bin in (accident, reference).
         only_in: "accident" or "reference" when the channel exists in one recording only.
+        entered: (n,) bool, True for a bin where the channel's content grew in both runs at
+            once and the two began to differ: the previous bin's messages were equal, and
+            from it to this one the first message of each run gained the same number of
+            elements in its repeated fields (an obstacle came into view in both). None when
+            not computed.
     """
 
     topic: str
@@ -71,6 +76,7 @@ class ChannelSeries:
     mdr: np.ndarray
     messages: np.ndarray
     only_in: str | None = None
+    entered: np.ndarray | None = None
 
 
 #: A message in a bin: (log time [ns], arrival, channel, payload, decoder, message). A message
@@ -97,6 +103,20 @@ def _message(e: _Entry) -> Any:
 
 def _decoded(e: _Entry) -> _Entry:
     return e if e[4] is None else (e[0], e[1], e[2], e[3], None, _message(e))
+
+
+def _entered(before: tuple[_Entry, _Entry], now: tuple[_Entry, _Entry]) -> bool:
+    """Whether the content of a channel grew the same way in both runs from ``before`` (the
+    first messages of a bin whose messages were equal) to ``now`` (this bin's first messages,
+    which differ): equal repeated-field lengths in the two runs at each bin, and from one bin
+    to the next no length shrinks and at least one grows."""
+    la0 = repeated_lengths(_message(before[0]))
+    # equal payloads are one message (decoded once)
+    lb0 = la0 if before[0][3] == before[1][3] else repeated_lengths(_message(before[1]))
+    la1, lb1 = (repeated_lengths(_message(e)) for e in now)
+    if la0 != lb0 or la1 != lb1 or len(la0) != len(la1):
+        return False
+    return all(x >= y for x, y in zip(la1, la0, strict=True)) and la1 != la0
 
 
 def _score(a: _Entry, b: _Entry, tol: Tolerance) -> float:
@@ -126,6 +146,7 @@ class _Pending:
     leftover_side: int
     leftover: list[_Entry]
     counts: tuple[int, int]
+    entered: bool = False
 
 
 @dataclass
@@ -133,7 +154,10 @@ class _Acc:
     bins: list[int] = field(default_factory=list)
     values: list[float] = field(default_factory=list)
     counts: list[tuple[int, int]] = field(default_factory=list)
+    entered: list[bool] = field(default_factory=list)
     pending: _Pending | None = None
+    #: the first messages of the last bin, when its messages were equal pair by pair
+    equal_before: tuple[_Entry, _Entry] | None = None
 
     def finish_pending(self) -> None:
         p = self.pending
@@ -144,6 +168,7 @@ class _Acc:
             self.bins.append(p.index)
             self.values.append((sum(p.scores) + len(p.leftover)) / n)
             self.counts.append(p.counts)
+            self.entered.append(p.entered)
         self.pending = None
 
     def add_bin(
@@ -152,11 +177,18 @@ class _Acc:
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
         paired = min(len(a_msgs), len(b_msgs))
+        if self.equal_before is not None and paired and a_msgs[0][3] != b_msgs[0][3]:
+            # decoded once here: their score and whether content entered both read them
+            a_msgs[0], b_msgs[0] = _decoded(a_msgs[0]), _decoded(b_msgs[0])
         scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
         side = ACCIDENT if len(a_msgs) > paired else REFERENCE
         # decoded now: an unpaired message counts only if it decodes, and may pair next bin
         leftover = [_decoded(e) for e in (a_msgs if side == ACCIDENT else b_msgs)[paired:]]
         counts = (len(a_msgs), len(b_msgs))
+        equal = paired > 0 and counts[0] == counts[1] and not any(scores)
+        entered = (self.equal_before is not None and paired > 0 and counts[0] == counts[1]
+                   and not equal and _entered(self.equal_before, (a_msgs[0], b_msgs[0])))
+        self.equal_before = (a_msgs[0], b_msgs[0]) if equal else None
         p = self.pending
         if (
             adjacent and p is not None and p.index == index - 1 and p.leftover and leftover
@@ -169,7 +201,7 @@ class _Acc:
             p.leftover = p.leftover[k:]
             leftover = leftover[k:]
         self.finish_pending()
-        self.pending = _Pending(index, scores, side, leftover, counts)
+        self.pending = _Pending(index, scores, side, leftover, counts, entered)
 
 
 @dataclass(frozen=True)
@@ -451,6 +483,7 @@ def _one_pass(
             mdr=np.asarray(a.values, dtype=np.float64),
             messages=np.asarray(a.counts, dtype=np.int64).reshape(-1, 2),
             only_in=only,
+            entered=np.asarray(a.entered, dtype=bool),
         )
     warnings = tuple(
         f"{rec.path}: the summary section's start time lies after the first message; "

@@ -306,6 +306,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         accident_text,
         change,
         confidence_text,
+        entries_passed_text,
         regression_text,
         replay_text,
         robust_text,
@@ -334,6 +335,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
         if report.get("walk_fallback"):
             t.add_row("", f"({report['walk_fallback']})")
+        if report.get("entries_passed"):
+            t.add_row("", f"({entries_passed_text(report)})")
     if report.get("confidence"):
         t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:

@@ -94,6 +94,8 @@ def render(result: DiffResult, env: Env) -> None:
     from rich.table import Table
     from rich.text import Text
 
+    from rocas.analysis.diff import entries_text
+
     out = env.out()
     p = result.pinpoint
     table = Table(title="Channels (MDR change points)", title_justify="left")
@@ -123,6 +125,12 @@ def render(result: DiffResult, env: Env) -> None:
         out.print(Text(
             f"No deviating module: no module reachable from {p.control_channel} has a change "
             + ("point." if p.fallback else "point within the reaction window."), style="yellow"))
+    e = result.entries
+    if e is not None and e.deviating_module != p.deviating_module:
+        prose(out, "Note: " + entries_text(
+            {c.topic: c.entered_s for c in result.channels if c.entered_s is not None},
+            e.deviating_module) + " (rocas analyze decides between the two with module "
+            "substitution).")
     if p.exclusions:
         out.print()
         out.print("Other modules:")

@@ -114,8 +114,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     alternates = alternate_references(physical.get("front", []), physical["chosen"],
                                       run.cfg.alternate_references)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
-                "module": chosen_diff["deviating_module"], "path": chosen_diff["path"],
-                "fallback": chosen_diff.get("fallback")}]
+                **_answer(chosen_diff, None)}]
     # each alternate reference is simulated on a worker of its own while this process asks
     # module substitution: three independent simulations of half a second or so each; the
     # diffs (a few hundredths of a second) are taken here, which spares the workers the
@@ -125,6 +124,13 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     opinion = None
     if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
+    if opinion is not None:
+        answers[0] |= _answer(chosen_diff, opinion)
+        if answers[0].get("entries_passed"):
+            run.state["done"]["diff"] = chosen_diff = {
+                **chosen_diff, "deviating_module": answers[0]["module"],
+                "path": answers[0]["path"], "fallback": answers[0]["fallback"],
+                "entries_passed": answers[0]["entries_passed"]}
     diffs: list[dict[str, Any] | None] = [None]
     for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
         job.result()
@@ -132,8 +138,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
                      delta_s=run.cfg.delta_s).to_json()
         diffs.append(found)
         answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
-                        "module": found["deviating_module"], "path": found["path"],
-                        "fallback": found["fallback"]})
+                        **_answer(found, opinion)})
     simulations = len(alternates)
     result: dict[str, Any] = {"answers": answers}
     if opinion is not None:
@@ -156,6 +161,35 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     result["note"] = note(result)
     run.finish("confidence", result, time.perf_counter() - t0, simulations)
     return result
+
+
+def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
+    """A reference's answer from its diff (``found``: the diff's JSON or the diff phase's
+    summary): Algorithm 1's walk, or the walk with the departures where content entered both
+    runs passed over (``found["entries"]``, :func:`rocas.analysis.diff.entries_to_pass`)
+    when the two name different modules and module substitution (``opinion``) supports the
+    second and not the first.
+
+    Content that enters both runs at once and differs from its first message (a bus in one
+    run, a truck in the other, coming into view at the same tick) makes its channel depart
+    there, and Algorithm 1 names the module that wrote it. That can be right (a perception
+    that cannot see a car approaching from behind, whatever its configuration) or wrong (a
+    planner that misjudges the car once it is seen). The diff alone cannot tell; module
+    substitution can: when ground truth in the module Algorithm 1 names leaves the accident
+    (``disagrees``) but is consistent with the module the walk reaches past the entries, the
+    second is the answer.
+    """
+    answer = {"module": found["deviating_module"], "path": found["path"],
+              "fallback": found.get("fallback")}
+    if found.get("entries_passed"):  # a summary this phase already resolved
+        return {**answer, "entries_passed": found["entries_passed"]}
+    entries = found.get("entries")
+    if (opinion is None or not entries or entries["deviating_module"] == answer["module"]
+            or opinion.stance(entries["deviating_module"]) not in _SUPPORTS
+            or opinion.stance(answer["module"]) != "disagrees"):
+        return answer
+    return {"module": entries["deviating_module"], "path": entries["path"],
+            "fallback": entries["fallback"], "entries_passed": entries["channels"]}
 
 
 def record_reference(scenario: Scenario, reference: Path) -> None:
@@ -184,10 +218,13 @@ def _adopt(run: Run, answer: dict[str, Any], data: dict[str, Any]) -> None:
     with atomic_path(run.out / "reference.mcap") as tmp:
         shutil.copyfile(run.out / answer["reference"], tmp)
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
-    run.state["done"]["diff"] = {"deviating_module": data["deviating_module"], "path": data["path"],
+    run.state["done"]["diff"] = {"deviating_module": answer["module"], "path": answer["path"],
                                  "control_channel": data["control_channel"],
-                                 "fallback": data["fallback"],
+                                 "fallback": answer["fallback"],
+                                 "entries": data["entries"],
                                  "adopted_from": answer["reference"]}
+    if answer.get("entries_passed"):
+        run.state["done"]["diff"]["entries_passed"] = answer["entries_passed"]
 
 
 def note(result: dict[str, Any]) -> str:

@@ -20,6 +20,7 @@ def phase_diff(run: Run) -> dict[str, Any]:
     data = result.to_json()
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
     summary = {"deviating_module": data["deviating_module"], "path": data["path"],
-               "control_channel": data["control_channel"], "fallback": data["fallback"]}
+               "control_channel": data["control_channel"], "fallback": data["fallback"],
+               "entries": data["entries"]}
     run.finish("diff", summary, time.perf_counter() - t0, 0)
     return summary

@@ -65,6 +65,9 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "path": diff.get("path", []),
         # why the walk did not start at the control channel's change point (it had none)
         "walk_fallback": diff.get("fallback"),
+        # the departures where content entered both runs, passed over (module substitution
+        # disagreed with the module Algorithm 1 named at them): topic -> time [s]
+        "entries_passed": diff.get("entries_passed"),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -103,6 +106,14 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
             f"before {max(horizon, 0.0):.1f} s by h1 = {_fmt(nearest['objectives'][0])} m^2, over "
             f"the limit of {_fmt(state['config']['h1_limit_m2'])} m^2.")
     return report
+
+
+def entries_passed_text(report: dict[str, Any]) -> str:
+    """Why the walk passed over departures where content entered both runs (one clause)."""
+    from rocas.analysis.diff import entries_text
+
+    return (entries_text(report["entries_passed"], report["deviating_module"])
+            + "; module substitution disagrees with the module named at those departures")
 
 
 def _nothing_recorded(replay: dict[str, Any], accident: Any) -> bool:
@@ -245,6 +256,8 @@ def markdown(report: dict[str, Any]) -> str:
                      f"(walk: {' → '.join(report['path'])})")
         if report.get("walk_fallback"):
             lines.append(f"  - {report['walk_fallback']}.")
+        if report.get("entries_passed"):
+            lines.append(f"  - {entries_passed_text(report)}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:
