@@ -236,3 +236,46 @@ def test_undecodable_messages_are_left_out_even_where_both_files_hold_them(tmp_p
     stats_a, stats_b = rec_a.report.channel_stats["/j"], rec_b.report.channel_stats["/j"]
     assert (stats_a.decoded, stats_a.undecodable) == (3, 1)
     assert (stats_b.decoded, stats_b.undecodable) == (3, 2)
+
+
+def _obstacles(path, frames, topic="/perception/obstacles"):
+    """A recording of PerceptionObstacles at 0.0, 0.1, ... s: ``frames[i]`` lists the
+    sub-types (e.g. ``"ST_BUS"``) of the obstacles in message i."""
+    from rocas.msgs import perception_pb2
+
+    with RecordingWriter(path) as w:
+        w.add_channel(topic, perception_pb2.PerceptionObstacles, writers=["perception"])
+        for i, kinds in enumerate(frames):
+            m = perception_pb2.PerceptionObstacles()
+            for k, kind in enumerate(kinds):
+                m.perception_obstacle.add(id=k + 1, sub_type=kind)
+            w.write(topic, m, log_time_ns=int(round(i * 0.1 * S)))
+    return path
+
+
+def _entered(tmp_path, frames_a, frames_b):
+    a = _obstacles(tmp_path / "a.mcap", frames_a)
+    b = _obstacles(tmp_path / "b.mcap", frames_b)
+    s = _series(tmp_path, a, b).series["/perception/obstacles"]
+    return [round(float(t), 1) for t in s.times_s[s.entered]]
+
+
+def test_content_entering_both_runs_at_once_and_differing_is_marked(tmp_path):
+    car, bus, truck = "ST_CAR", "ST_BUS", "ST_TRUCK"
+    # a bus in one run, a truck in the other, both in view from 0.3 s; a parked car alike
+    assert _entered(tmp_path, [[]] * 3 + [[bus]] * 3, [[]] * 3 + [[truck]] * 3) == [0.3]
+    assert _entered(tmp_path, [[car]] * 3 + [[car, bus]] * 3,
+                    [[car]] * 3 + [[car, truck]] * 3) == [0.3]
+
+
+def test_content_that_enters_one_run_first_shrinks_or_is_alike_is_not_marked(tmp_path):
+    car, bus, truck = "ST_CAR", "ST_BUS", "ST_TRUCK"
+    # the truck comes into view a bin later (a hedge hides it in one run)
+    assert _entered(tmp_path, [[]] * 3 + [[bus]] * 3, [[]] * 4 + [[truck]] * 2) == []
+    # a light leaves both runs' view and the one left differs (A10's shape)
+    assert _entered(tmp_path, [[car, bus]] * 3 + [[bus]] * 3, [[car, bus]] * 3 + [[truck]] * 3) == []
+    # the runs differed before the content entered
+    assert _entered(tmp_path, [[car]] * 3 + [[car, bus]] * 3,
+                    [[truck]] * 3 + [[truck, truck]] * 3) == []
+    # content entered alike, and the two differ a bin later
+    assert _entered(tmp_path, [[]] * 3 + [[bus]] + [[car]] * 2, [[]] * 3 + [[bus]] + [[truck]] * 2) == []

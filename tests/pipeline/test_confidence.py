@@ -72,3 +72,34 @@ def test_the_note_says_what_was_adopted_and_what_substitution_says():
     assert text.startswith("1 of 3 references name planning (2 name perception)")
     assert "the chosen reference's answer stands" in text
     assert "Unstable" in note(kept | {"level": "unstable"})
+
+
+class _Opinion:
+    """A stand-in for SubstitutionOpinion: a stance per module."""
+
+    def __init__(self, **stances):
+        self.stances = stances
+
+    def stance(self, module):
+        return self.stances.get(module, "disagrees")
+
+
+def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
+    from rocas.pipeline.confidence import _answer
+
+    found = {"deviating_module": "perception", "path": ["/control", "control", "perception"],
+             "fallback": None,
+             "entries": {"deviating_module": "planning", "path": ["/control", "control", "planning"],
+                         "fallback": None, "channels": {"/perception/obstacles": 3.5}}}
+    # ground truth in perception leaves the accident, and planning has none to try (A5-like)
+    taken = _answer(found, _Opinion(planning="consistent"))
+    assert taken["module"] == "planning" and taken["entries_passed"] == {"/perception/obstacles": 3.5}
+    # the diff phase's summary once resolved (as a resumed run reads it) stays resolved
+    summary = {**found, "deviating_module": "planning", "path": taken["path"],
+               "entries_passed": taken["entries_passed"]}
+    assert _answer(summary, None)["module"] == "planning"
+    # substitution clears both (a car from behind that nothing avoids: A7-like): Algorithm 1's
+    for opinion in (_Opinion(), _Opinion(perception="agrees", planning="consistent"), None):
+        kept = _answer(found, opinion)
+        assert kept["module"] == "perception" and "entries_passed" not in kept
+    assert _answer({**found, "entries": None}, _Opinion(planning="consistent"))["module"] == "perception"

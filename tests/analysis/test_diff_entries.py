@@ -1,0 +1,74 @@
+"""Departures where content enters both runs at once (diff.entries_to_pass): a four-module
+pipeline in which an obstacle comes into view as a bus in one run and a truck in the other."""
+
+import pytest
+
+from rocas.analysis import diff
+from rocas.msgs import control_pb2, perception_pb2
+from rocas.recording import RecordingWriter
+
+S = 1_000_000_000
+TICKS = 60  # 6 s at 10 Hz
+
+
+def _run(path, kind, *, seen_at, predicted_at, differs_at, early_at=None):
+    """perception -> /obstacles -> prediction -> /prediction -> planning -> /planning ->
+    control -> /control. The obstacle is in /obstacles from ``seen_at`` s and in /prediction
+    from ``predicted_at`` s (as ``kind``); /planning and /control take the value of
+    ``kind`` from ``differs_at`` s on (and /planning already from ``early_at``, if given)."""
+    value = {"ST_BUS": 1.0, "ST_TRUCK": 2.0}[kind]
+    with RecordingWriter(path) as w:
+        w.add_channel("/obstacles", perception_pb2.PerceptionObstacles, writers=["perception"],
+                      readers=["prediction"])
+        w.add_channel("/prediction", perception_pb2.PerceptionObstacles, writers=["prediction"],
+                      readers=["planning"])
+        w.add_channel("/planning", control_pb2.ControlCommand, writers=["planning"],
+                      readers=["control"])
+        w.add_channel("/control", control_pb2.ControlCommand, writers=["control"], role="control")
+        for i in range(TICKS):
+            t = i / 10
+            ns = i * S // 10
+            for topic, since in (("/obstacles", seen_at), ("/prediction", predicted_at)):
+                m = perception_pb2.PerceptionObstacles()
+                if t >= since - 1e-9:
+                    m.perception_obstacle.add(id=1, sub_type=kind)
+                w.write(topic, m, log_time_ns=ns)
+            plan = value if t >= (early_at if early_at is not None else differs_at) - 1e-9 else 0
+            w.write("/planning", control_pb2.ControlCommand(throttle=plan), log_time_ns=ns)
+            act = value if t >= differs_at - 1e-9 else 0.0
+            w.write("/control", control_pb2.ControlCommand(throttle=act), log_time_ns=ns)
+    return path
+
+
+def _diff(tmp_path, **timing):
+    return diff(_run(tmp_path / "a.mcap", "ST_BUS", **timing),
+                _run(tmp_path / "b.mcap", "ST_TRUCK", **timing))
+
+
+def test_an_entry_that_travels_down_the_pipeline_is_passed_over(tmp_path):
+    r = _diff(tmp_path, seen_at=2.0, predicted_at=2.0, differs_at=3.0)
+    assert r.deviating_module == "perception"  # Algorithm 1 as the paper has it
+    assert r.entries is not None and r.entries.deviating_module == "planning"
+    by = {c.topic: c for c in r.channels}
+    assert by["/obstacles"].entered_s == pytest.approx(2.0)
+    assert by["/obstacles"].change_point_s == pytest.approx(2.0)
+    assert by["/obstacles"].after_entry.first_s is None
+    assert r.to_json()["entries"]["channels"] == pytest.approx(
+        {"/obstacles": 2.0, "/prediction": 2.0})
+    # one cycle later downstream is still the entry travelling
+    r = _diff(tmp_path, seen_at=2.0, predicted_at=2.2, differs_at=3.0)
+    assert r.entries.deviating_module == "planning"
+
+
+def test_a_module_that_gains_content_well_after_its_input_decided_something(tmp_path):
+    # prediction adds the obstacle 0.5 s after perception saw it: its own departure
+    r = _diff(tmp_path, seen_at=2.0, predicted_at=2.5, differs_at=3.0)
+    assert r.entries is not None and r.entries.deviating_module == "prediction"
+    assert {c.topic for c in r.channels if c.entered_s is not None} == {"/obstacles"}
+
+
+def test_no_entry_is_passed_over_once_a_channel_differed_otherwise(tmp_path):
+    r = _diff(tmp_path, seen_at=2.0, predicted_at=2.0, differs_at=3.0, early_at=1.0)
+    assert r.entries is None
+    assert all(c.entered_s is None for c in r.channels)
+    assert r.to_json()["entries"] is None
