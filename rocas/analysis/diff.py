@@ -116,6 +116,16 @@ class DiffResult:
         return self.pinpoint.control_channel
 
     @property
+    def named_at_entry(self) -> bool:
+        """Whether Algorithm 1's module departs first where content entered both runs: its
+        t* is the entry time of a channel it writes whose entry was passed over."""
+        m = self.pinpoint.deviating_module
+        t = self.pinpoint.t_star.get((MODULE, m)) if m else None
+        return t is not None and any(
+            m in c.writers and c.entered_s is not None and abs(c.entered_s - t) < 1e-9
+            for c in self.channels)
+
+    @property
     def complete(self) -> bool:
         """Whether the answer used the whole of both recordings and nothing in them needed a
         warning (False whenever :attr:`warnings` has a line)."""
@@ -171,6 +181,7 @@ class DiffResult:
                 "deviating_module": self.entries.deviating_module,
                 "path": list(self.entries.path),
                 "fallback": self.entries.fallback,
+                "named_at_entry": self.named_at_entry,
                 "channels": {c.topic: c.entered_s for c in self.channels
                              if c.entered_s is not None},
             },

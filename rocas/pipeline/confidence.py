@@ -175,9 +175,11 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     there, and Algorithm 1 names the module that wrote it. That can be right (a perception
     that cannot see a car approaching from behind, whatever its configuration) or wrong (a
     planner that misjudges the car once it is seen). The diff alone cannot tell; module
-    substitution can: when ground truth in the module Algorithm 1 names leaves the accident
-    (``disagrees``) but is consistent with the module the walk reaches past the entries, the
-    second is the answer.
+    substitution can: when Algorithm 1's module was named at such an entry (its first
+    departure is one, ``named_at_entry``), and substitution disagrees with it but supports the
+    module the walk reaches past the entries, the second is the answer. An answer Algorithm 1
+    reached otherwise stands: passing entries over can also expose another channel of a
+    module (an A2 variant's brake signal) that the walk did not need.
     """
     answer = {"module": found["deviating_module"], "path": found["path"],
               "fallback": found.get("fallback")}
@@ -185,6 +187,7 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
         return {**answer, "entries_passed": found["entries_passed"]}
     entries = found.get("entries")
     if (opinion is None or not entries or entries["deviating_module"] == answer["module"]
+            or not entries.get("named_at_entry")
             or opinion.stance(entries["deviating_module"]) not in _SUPPORTS
             or opinion.stance(answer["module"]) != "disagrees"):
         return answer

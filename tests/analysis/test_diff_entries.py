@@ -49,6 +49,7 @@ def test_an_entry_that_travels_down_the_pipeline_is_passed_over(tmp_path):
     r = _diff(tmp_path, seen_at=2.0, predicted_at=2.0, differs_at=3.0)
     assert r.deviating_module == "perception"  # Algorithm 1 as the paper has it
     assert r.entries is not None and r.entries.deviating_module == "planning"
+    assert r.named_at_entry and r.to_json()["entries"]["named_at_entry"]
     by = {c.topic: c for c in r.channels}
     assert by["/obstacles"].entered_s == pytest.approx(2.0)
     assert by["/obstacles"].change_point_s == pytest.approx(2.0)
@@ -64,6 +65,7 @@ def test_a_module_that_gains_content_well_after_its_input_decided_something(tmp_
     # prediction adds the obstacle 0.5 s after perception saw it: its own departure
     r = _diff(tmp_path, seen_at=2.0, predicted_at=2.5, differs_at=3.0)
     assert r.entries is not None and r.entries.deviating_module == "prediction"
+    assert r.named_at_entry  # perception, at its entry
     assert {c.topic for c in r.channels if c.entered_s is not None} == {"/obstacles"}
 
 

@@ -90,7 +90,8 @@ def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
     found = {"deviating_module": "perception", "path": ["/control", "control", "perception"],
              "fallback": None,
              "entries": {"deviating_module": "planning", "path": ["/control", "control", "planning"],
-                         "fallback": None, "channels": {"/perception/obstacles": 3.5}}}
+                         "fallback": None, "named_at_entry": True,
+                         "channels": {"/perception/obstacles": 3.5}}}
     # ground truth in perception leaves the accident, and planning has none to try (A5-like)
     taken = _answer(found, _Opinion(planning="consistent"))
     assert taken["module"] == "planning" and taken["entries_passed"] == {"/perception/obstacles": 3.5}
@@ -103,3 +104,6 @@ def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
         kept = _answer(found, opinion)
         assert kept["module"] == "perception" and "entries_passed" not in kept
     assert _answer({**found, "entries": None}, _Opinion(planning="consistent"))["module"] == "perception"
+    # Algorithm 1 named its module at another departure than an entry (an A2 variant)
+    other = {**found, "entries": {**found["entries"], "named_at_entry": False}}
+    assert _answer(other, _Opinion(planning="consistent"))["module"] == "perception"
