@@ -340,6 +340,12 @@ def report_markdown(result: DiffResult) -> str:
                      "channel has a change point).")
     if p.fallback:
         lines += ["", f"Note: {p.fallback}."]
+    e = result.entries
+    if e is not None and e.deviating_module != p.deviating_module:
+        from rocas.analysis.diff import entries_text
+
+        entered = {c.topic: c.entered_s for c in result.channels if c.entered_s is not None}
+        lines += ["", f"Note: {entries_text(entered, e.deviating_module)}."]
     lines += ["", "| channel | writers | t* [s] | MDR before | MDR after |", "|---|---|---|---|---|"]
     for c in result.channels:
         t = "—" if c.change_point_s is None else f"{c.change_point_s:.2f}"

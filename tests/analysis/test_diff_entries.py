@@ -74,3 +74,17 @@ def test_no_entry_is_passed_over_once_a_channel_differed_otherwise(tmp_path):
     assert r.entries is None
     assert all(c.entered_s is None for c in r.channels)
     assert r.to_json()["entries"] is None
+
+
+def test_the_terminal_and_the_markdown_say_what_the_walk_past_the_entries_names(tmp_path, rocas):
+    from rocas.viz.diff import report_markdown
+
+    a = _run(tmp_path / "a.mcap", "ST_BUS", seen_at=2.0, predicted_at=2.0, differs_at=3.0)
+    b = _run(tmp_path / "b.mcap", "ST_TRUCK", seen_at=2.0, predicted_at=2.0, differs_at=3.0)
+    res = rocas("diff", a, b)
+    assert res.code == 0, res.stderr
+    text = " ".join(res.stdout.split())
+    assert "Initial deviating module: perception" in text
+    assert "content entered both runs and began to differ on /obstacles at 2.00 s" in text
+    assert "the walk names planning" in text
+    assert "the walk names planning" in report_markdown(diff(a, b))
