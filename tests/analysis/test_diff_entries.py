@@ -1,6 +1,8 @@
 """Departures where content enters both runs at once (diff.entries_to_pass): a four-module
 pipeline in which an obstacle comes into view as a bus in one run and a truck in the other."""
 
+from pathlib import Path
+
 import pytest
 
 from rocas.analysis import diff
@@ -88,3 +90,37 @@ def test_the_terminal_and_the_markdown_say_what_the_walk_past_the_entries_names(
     assert "content entered both runs and began to differ on /obstacles at 2.00 s" in text
     assert "the walk names planning" in text
     assert "the walk names planning" in report_markdown(diff(a, b))
+
+
+ENTERING = Path(__file__).resolve().parents[1] / "scenarios" / "variants" / "entering"
+
+
+@pytest.mark.slow
+def test_a_crossing_vehicle_that_enters_view_as_a_bus_or_a_truck(tmp_path):
+    """A variant of A5 (our generator, seed 97) in which the crossing vehicle comes into range
+    at 3.5 s, analysed as rocas analyze does: replayed from its recording, with the reference
+    that makes the vehicle a truck. Both runs are the same until it enters; Algorithm 1 names
+    perception at that entry; past it, the walk names planning (A5's documented module), and
+    module substitution supports planning, not perception."""
+    import rocas.replay as replay_mod
+    from rocas.ads.run import simulate
+    from rocas.pipeline.physical import apply_physical
+    from rocas.pipeline.substitution import second_opinion
+    from rocas.scenarios.variants import load_variant
+    from rocas.search.space import Mutation
+
+    v = load_variant(ENTERING / "a05_crossing_car_overtake_flip__mixed_s97_k004.toml")
+    simulate(v.scenario, output=tmp_path / "recorded.mcap")
+    recon = replay_mod.reconstruct(tmp_path / "recorded.mcap")
+    replay_mod.replay(recon, output=tmp_path / "a.mcap")
+    bus = next(a.id for a in recon.scenario.actors if a.model == "bus")
+    simulate(apply_physical(recon.scenario, Mutation({f"actor.{bus}.model": "truck"})),
+             output=tmp_path / "b.mcap")
+    r = diff(tmp_path / "a.mcap", tmp_path / "b.mcap")
+    assert r.deviating_module == "perception" and r.named_at_entry
+    assert r.entries.deviating_module == "planning"
+    entered = {c.topic: c.entered_s for c in r.channels if c.entered_s is not None}
+    assert entered == pytest.approx({"/perception/obstacles": 3.5, "/prediction": 3.5})
+    opinion = second_opinion(recon.scenario)
+    assert opinion.stance("perception") == "disagrees"
+    assert opinion.stance("planning") == "consistent"
