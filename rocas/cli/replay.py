@@ -57,6 +57,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
         print(f"  replay{what_if}: {_accident(report.accident)} -- {report.outcome.summary()}",
               file=out)
         verdict = "reproduced" if report.reproduced else "NOT reproduced"
+        if report.only_emergency:
+            verdict = ("the emergency before the recorded collision reproduced, not the "
+                       "collision")
         print(f"  {verdict}; ego error before the accident: RMSE {report.ego_rmse_m:.2f} m, "
               f"max {report.ego_max_error_m:.2f} m (to t={report.compared_until_s:.2f} s); "
               f"{report.wall_time_s:.1f} s", file=out)

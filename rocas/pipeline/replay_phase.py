@@ -40,8 +40,16 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
                       "recorded_accident": report.original.to_dict() if report.original else None,
                       "accident": report.accident.to_dict() if report.accident else None,
                       "ego_rmse_m": report.ego_rmse_m, "compared_until_s": report.compared_until_s,
+                      "only_emergency": report.only_emergency,
                       # damage the reader found: the analysis used less than the whole recording
                       "warnings": list(recon.warnings), "complete": recon.complete}
+            if report.only_emergency:
+                result["warnings"].append(
+                    f"{recording}: the replay reproduces the emergency at "
+                    f"{report.accident.time_s:.2f} s that preceded the recorded collision at "
+                    f"{report.original.time_s:.2f} s, but not the collision (smallest gap "
+                    f"{report.outcome.min_separation_m:.2f} m): the analysis explains the "
+                    "emergency")
         else:
             assert scenario is not None
             res = simulate(scenario, output=run.out / "accident.mcap")

@@ -153,7 +153,11 @@ def replay_text(report: dict[str, Any]) -> str:
         text = "the recording holds no accident" + \
             (", nor does its replay" if replayed is None else f"; the replay has {accident_text(replayed)}")
         return text + f", ego RMSE over the whole run {rmse:.3f} m"
-    if rep.get("reproduced"):
+    if rep.get("only_emergency"):
+        text = (f"the emergency before the recorded {accident_text(recorded)} reproduced "
+                f"({accident_text(replayed)}), not the collision: the analysis explains the "
+                "emergency")
+    elif rep.get("reproduced"):
         text = f"reproduced ({accident_text(replayed)})"
     else:
         text = f"not reproduced (recorded {accident_text(recorded)}, replay {accident_text(replayed)})"

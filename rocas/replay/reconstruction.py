@@ -63,6 +63,9 @@ class Reconstruction:
         notes: assumptions made (missing metadata, unrecognised colours, ...), and the
             recording's damage (the lines of ``warnings`` come first).
         path: the recording.
+        original_emergency_s: when the recorded run, which ended in a collision, had braked
+            hard or stopped in an emergency before it (the earlier of the two) [s]; None
+            otherwise.
         warnings: what the reader found: damage (truncation, skipped chunks, counts that
             disagree with the summary section), undecodable messages, and parts of the
             recording that disagree (the start the ``rocas.ego`` record describes is not where
@@ -80,6 +83,7 @@ class Reconstruction:
     recorded_partner: str | None = None
     notes: tuple[str, ...] = ()
     path: str = ""
+    original_emergency_s: float | None = None
     warnings: tuple[str, ...] = ()
 
     @property
@@ -176,6 +180,18 @@ def _original_accident(rec: RecordedRun, notes: list[str]) -> tuple[str, float |
     return "", None, None, ""
 
 
+def _emergency_before_collision(rec: RecordedRun, kind: str, collision_s: float | None
+                                ) -> float | None:
+    """The recorded run's emergency time (hard brake or estop, the earlier) when it came
+    before its collision; None otherwise (or without the recorder's times)."""
+    run = rec.run_meta
+    if kind != "collision" or run is None or collision_s is None:
+        return None
+    times = [float(run[k]) for k in ("hard_brake_time_s", "estop_time_s") if run.get(k)]
+    t = min(times) if times else None
+    return t if t is not None and t < collision_s else None
+
+
 def collision_partner(tracks: tuple[Track, ...], ego_pose: np.ndarray, t: float) -> str | None:
     """The track whose box was nearest the ego's box at time ``t`` (None if none was near).
 
@@ -257,7 +273,8 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     return Reconstruction(scenario=scenario, original=original, ego_track=rec.ego_track,
                           times=rec.ego_times, tracks=tracks, original_summary=summary,
                           recorded_partner=partner, notes=tuple(notes), path=rec.path,
-                          warnings=tuple(warnings))
+                          warnings=tuple(warnings),
+                          original_emergency_s=_emergency_before_collision(rec, kind, t))
 
 
 def _start_mismatch(scenario: Scenario, rec: RecordedRun) -> str | None:

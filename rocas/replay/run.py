@@ -30,7 +30,13 @@ class ReplayReport:
     Attributes:
         reproduced: the replay had an accident of the original's kind, with the same other
             party (collisions) and within :data:`TIME_TOLERANCE_S` of its time; for a clean
-            recording, the replay was clean too.
+            recording, the replay was clean too; or (``only_emergency``) the recorded run
+            braked hard or stopped in an emergency before its collision, and the replay did
+            the same within :data:`TIME_TOLERANCE_S` of that time without the collision.
+        only_emergency: the replay reproduced the emergency that preceded the recorded
+            collision, not the collision (a collision by a few centimetres that the replay's
+            reconstructed actors miss): the accident a later analysis explains is the
+            emergency.
         accident: the replay's accident (None when clean); original: the recorded one.
         outcome: the replay's full oracle outcome.
         ego_rmse_m, ego_max_error_m: ego position error against the recorded pose up to
@@ -57,6 +63,7 @@ class ReplayReport:
     ego: np.ndarray | None = None
     times: np.ndarray | None = None
     reconstruction: Reconstruction | None = None
+    only_emergency: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -65,6 +72,7 @@ class ReplayReport:
             "recording": rec.path if rec else None,
             "scenario": rec.scenario.name if rec else None,
             "reproduced": self.reproduced,
+            "only_emergency": self.only_emergency,
             "accident": self.accident.to_dict() if self.accident else None,
             "original_accident": self.original.to_dict() if self.original else None,
             "time_error_s": self.time_error_s,
@@ -108,6 +116,14 @@ def same_accident(original: AccidentInfo | None, replayed: AccidentInfo | None) 
     if original.time_s is None or replayed.time_s is None:
         return original.time_s is None and replayed.time_s is None
     return abs(original.time_s - replayed.time_s) <= TIME_TOLERANCE_S + 1e-9
+
+
+def emergency_before_collision(rec: Reconstruction, replayed: AccidentInfo | None) -> bool:
+    """Whether the replay, without the recorded collision, had the emergency that preceded
+    it in the recording (within :data:`TIME_TOLERANCE_S`)."""
+    t = rec.original_emergency_s
+    return (t is not None and replayed is not None and replayed.kind == "emergency"
+            and replayed.time_s is not None and abs(replayed.time_s - t) <= TIME_TOLERANCE_S + 1e-9)
 
 
 def trajectory_error(rec_times: np.ndarray, rec_ego: np.ndarray, sim_times: np.ndarray,
@@ -158,13 +174,17 @@ def replay(source: Reconstruction | str | os.PathLike[str],
     if rec.original and accident and rec.original.time_s is not None \
             and accident.time_s is not None:
         terr = accident.time_s - rec.original.time_s
+    reproduced = same_accident(rec.original, accident)
+    only_emergency = not reproduced and emergency_before_collision(rec, accident)
     return ReplayReport(
-        reproduced=same_accident(rec.original, accident), accident=accident,
+        reproduced=reproduced or only_emergency, only_emergency=only_emergency,
+        accident=accident,
         original=rec.original, outcome=run.outcome, ego_rmse_m=rmse, ego_max_error_m=worst,
         compared_until_s=until, time_error_s=terr, params=params,
         output=run.recording, wall_time_s=wall, ego=run.ego, times=run.times,
         reconstruction=rec)
 
 
-__all__ = ["ReplayReport", "TIME_TOLERANCE_S", "accident_of", "replay", "same_accident",
+__all__ = ["ReplayReport", "TIME_TOLERANCE_S", "accident_of", "emergency_before_collision",
+           "replay", "same_accident",
            "trajectory_error"]

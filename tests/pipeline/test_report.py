@@ -75,3 +75,15 @@ def test_a_replay_from_less_than_the_whole_recording_says_so_everywhere():
     # a run directory from before the replay kept its warnings reads as complete
     old = {k: v for k, v in rep.items() if k not in ("complete", "warnings")}
     assert build_report(_state(old), None, "no_reference")["complete"] is True
+
+
+def test_the_replay_line_says_when_only_the_emergency_before_the_collision_came_back():
+    recorded = {"kind": "collision", "time_s": 7.55, "other": "obstacle_1"}
+    replayed = {"kind": "emergency", "time_s": 6.75, "other": None}
+    rep = {"source": "recording", "reproduced": True, "only_emergency": True,
+           "recorded_accident": recorded, "accident": replayed, "ego_rmse_m": 0.1,
+           "compared_until_s": 7.55}
+    report = build_report(_state(rep), Accident("emergency", 6.75, None), "no_reference")
+    assert replay_text(report).startswith(
+        "the emergency before the recorded collision with obstacle_1 at 7.55 s reproduced "
+        "(emergency at 6.75 s), not the collision: the analysis explains the emergency")

@@ -80,3 +80,30 @@ def test_mirrored_a3_variant_is_reproduced_with_one_truck(tmp_path):
     assert report.reproduced and report.accident is not None
     assert report.accident.kind == "collision" and report.accident.other == "obstacle_1"
     assert abs(report.accident.time_s - rec.original.time_s) <= 0.2
+
+
+NEAR_MISS = Path(__file__).resolve().parents[1] / "scenarios" / "variants" / "near_miss"
+
+
+@pytest.mark.slow
+def test_the_emergency_before_a_collision_by_centimetres_counts_as_reproduced(tmp_path):
+    """An A1 variant (our generator, seed 131): the ego stops in an emergency at 6.75 s and
+    the creeping car touches it at 7.55 s, 10 cm deep; the replay's rebuilt car passes
+    0.35 m away. The replay reproduces the emergency, says it is only that, and a replay
+    whose emergency is elsewhere in time is not reproduced."""
+    import dataclasses
+
+    from rocas.replay.run import emergency_before_collision
+
+    v = load_variant(NEAR_MISS / "a01_creeping_car_junction__mixed_s131_k000.toml")
+    simulate(v.scenario, output=tmp_path / "rec.mcap")
+    rec = reconstruct(tmp_path / "rec.mcap")
+    assert rec.original.kind == "collision" and rec.original_emergency_s == pytest.approx(6.75)
+    report = replay(rec)
+    assert report.accident.kind == "emergency" and report.accident.time_s == pytest.approx(6.75)
+    assert report.reproduced and report.only_emergency
+    assert report.to_dict()["only_emergency"] is True
+    assert not emergency_before_collision(dataclasses.replace(rec, original_emergency_s=None),
+                                          report.accident)
+    assert not emergency_before_collision(dataclasses.replace(rec, original_emergency_s=5.5),
+                                          report.accident)
