@@ -75,10 +75,13 @@ def test_the_note_says_what_was_adopted_and_what_substitution_says():
 
 
 class _Opinion:
-    """A stand-in for SubstitutionOpinion: a stance per module."""
+    """A stand-in for SubstitutionOpinion: a stance per module, the module whose ground truth
+    avoids the accident (if any) and whether all ground truth together does."""
 
-    def __init__(self, **stances):
+    def __init__(self, module=None, jointly_avoided=False, **stances):
         self.stances = stances
+        self.module = module
+        self.jointly_avoided = jointly_avoided
 
     def stance(self, module):
         return self.stances.get(module, "disagrees")
@@ -99,6 +102,10 @@ def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
     summary = {**found, "deviating_module": "planning", "path": taken["path"],
                "entries_passed": taken["entries_passed"]}
     assert _answer(summary, None)["module"] == "planning"
+    # substitution names prediction, which is neither (an A11 variant of seed 131): perception is
+    # cleared and the accident avoidable, so the walk past the entry is taken
+    taken = _answer(found, _Opinion(module="prediction", prediction="agrees"))
+    assert taken["module"] == "planning"
     # substitution clears both (a car from behind that nothing avoids: A7-like): Algorithm 1's
     for opinion in (_Opinion(), _Opinion(perception="agrees", planning="consistent"), None):
         kept = _answer(found, opinion)
