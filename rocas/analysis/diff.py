@@ -448,10 +448,11 @@ def diff(
     ctrl_series = res.series.get(ctrl)
     differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
     onset = float(ctrl_series.times_s[differing[0]]) if len(differing) else None
-    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset)
+    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s)
     pin_entries = None
     if entries:
-        pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset)
+        pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset,
+                                          bin_s=bin_s)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note

@@ -21,6 +21,13 @@ module whose change point falls within the window before their first differing b
 explain it. The answer is the one with the earliest change point, ties as above by distance
 from the control channel and then by name, and :attr:`PinpointResult.fallback` says the answer
 was found this way and why.
+
+A change point of the control channel in the recordings' first bin after their start (given the
+bin width) is the same case: the commands differ from their first messages on, and only the
+first bin, which both executions share, makes it a change point. No stretch before it shows
+the two executions alike, so the channels upstream, which differ from the start as well, have
+no change point that times their departure (their first seconds, the baseline their noise is
+measured on, already hold it), and the paper's pruning would cut the walk at the commands.
 """
 
 from __future__ import annotations
@@ -106,6 +113,7 @@ def find_initial_module(
     control_channel: str,
     delta_s: float = 3.0,
     control_onset_s: float | None = None,
+    bin_s: float | None = None,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -117,6 +125,9 @@ def find_initial_module(
         control_onset_s: when the control channel has no change point but its messages
             differ, the time of its first differing bin [s]: then only a change point at or
             before it, and at most ``delta_s`` before it, can explain the commands' difference.
+        bin_s: the series' bin width [s]: a first change point of the control channel at or
+            before it (the first bin after the start) counts as no change point, the commands
+            differing from ``control_onset_s`` on. None: every change point counts.
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -144,13 +155,19 @@ def find_initial_module(
 
     start: Node = (CHANNEL, control_channel)
     fallback: str | None = None
-    if start in succ and t_star[start] is None:
-        fallback = (f"{control_channel} has no change point (its messages "
+    t_control = t_star.get(start)
+    from_start = (t_control is not None and bin_s is not None and control_onset_s is not None
+                  and t_control <= bin_s * (1 + 1e-9))
+    if start in succ and (t_control is None or from_start):
+        fallback = ((f"{control_channel}'s first change point ({_fmt(t_control)}) is its first "
+                     "bin after the start, so nothing before it shows the two executions alike "
+                     f"(its messages differ from {control_onset_s:g} s on)") if from_start
+                    else f"{control_channel} has no change point (its messages "
                     + (f"differ from {control_onset_s:g} s on" if control_onset_s is not None
-                       else "are the same in both recordings")
-                    + "), so the walk starts from every module it depends on"
-                    + (f" that departs within [{control_onset_s - delta_s:g}, "
-                       f"{control_onset_s:g}] s" if control_onset_s is not None else ""))
+                       else "are the same in both recordings") + ")")
+        fallback += ", so the walk starts from every module it depends on" + (
+            f" that departs within [{control_onset_s - delta_s:g}, {control_onset_s:g}] s"
+            if control_onset_s is not None else "")
 
     def explains(tm: float) -> bool:
         """Whether a module departing at ``tm`` can explain the commands (the fallback's
@@ -197,8 +214,9 @@ def find_initial_module(
         elif m in reachable:
             exclusions[m] = _why_not(m, tm, deviating, t_star, depth, control_channel)
         elif m in feedback:
-            exclusions[m] = (f"reads {control_channel}, which has no change point, so its change "
-                             "may be the vehicle's response to the commands")
+            exclusions[m] = (f"reads {control_channel}, which has no change point to start the "
+                             "walk from, so its change may be the vehicle's response to the "
+                             "commands")
         else:
             written = set(cmg.channels_written_by(m))
             cut = [

@@ -90,6 +90,29 @@ def test_commands_that_differ_from_the_start_are_explained_only_by_earlier_chang
     assert r.deviating_module is None
 
 
+def test_a_control_change_point_in_the_first_bin_walks_as_the_fallback():
+    # a campaign A1 variant (ego 2.4 m from the stop line, the creeping car in view, the
+    # reference's car faster from the start): every channel differs from 0.1-0.2 s; /control
+    # has a change point only because the first bin (t = 0) is shared, planning's departure is
+    # in its baseline (first change point 3.7 s), and the paper's walk stopped at control
+    t = {"/apollo/perception/obstacles": None, "/apollo/prediction": 0.1,
+         "/apollo/planning": 3.7, "/apollo/control": 0.1, "/apollo/canbus/chassis": 0.2}
+    cmg = build_cmg([], APOLLO)
+    paper = find_initial_module(cmg, t, "/apollo/control", 3.0, control_onset_s=0.1)
+    assert paper.deviating_module == "control" and paper.fallback is None
+    r = find_initial_module(cmg, t, "/apollo/control", 3.0, control_onset_s=0.1, bin_s=0.1)
+    assert r.deviating_module == "prediction"
+    assert "first bin after the start" in r.fallback
+    assert "same change point as prediction" in r.exclusions["control"]
+    assert "outside [-2.9, 0.1] s" in r.exclusions["planning"]
+    assert "reads /apollo/control" in r.exclusions["canbus"]
+    # a change point one bin later has a shared stretch before it: the paper's walk
+    later = find_initial_module(cmg, {**t, "/apollo/control": 0.2, "/apollo/canbus/chassis": 0.3},
+                                "/apollo/control", 3.0,
+                                control_onset_s=0.2, bin_s=0.1)
+    assert later.fallback is None and later.deviating_module == "control"
+
+
 def test_fallback_ties_go_upstream():
     # perception and prediction depart in the same bin (the obstacle list and the forecasts
     # of a car that starts to slow down); the control channel never does
