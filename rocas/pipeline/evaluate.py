@@ -43,14 +43,11 @@ class VariantResult:
         outcome: the oracles' verdict.
         ego_xy: (T + 1, 2) ego positions [m].
         actors_xy: (T + 1, A, 2) actor positions [m].
-        ego_accel: (T + 1,) the ego's realised acceleration [m/s^2] (None when not known): it
-            changes at the tick the ego's commands take effect, before the position does.
     """
 
     outcome: Outcome
     ego_xy: np.ndarray
     actors_xy: np.ndarray
-    ego_accel: np.ndarray | None = None
 
 
 def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
@@ -62,8 +59,7 @@ def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
                          seeds=[t.seed for t in tasks])
     return [
         VariantResult(res.outcomes[i], np.ascontiguousarray(res.ego[i, :, :2]),
-                      np.ascontiguousarray(res.actors[i, :, :, :2]),
-                      np.ascontiguousarray(res.ego[i, :, 4]))
+                      np.ascontiguousarray(res.actors[i, :, :, :2]))
         for i in range(len(tasks))
     ]
 

@@ -61,10 +61,6 @@ PROGRESS_TOLERANCE_M = 1.0
 #: other lengths moves an actor by up to ~1e-4 m (the simulator resamples every path of a batch
 #: to one point count), which is no departure
 SAME_POSITION_M = 0.01
-#: two realised accelerations closer than this are the same [m/s^2]; the ego's acceleration
-#: departs at the tick its commands do (through the actuators' lag), while its position, from
-#: a standstill, needs tenths of a second to move SAME_POSITION_M
-SAME_ACCEL_MPS2 = 0.01
 #: a reference whose ego departs from the accident's earlier than this [s] is an early one
 #: (:func:`choose_reference` prefers the others): its planning and control differ from their
 #: first messages, so they have no change point and Algorithm 1 ends at /control
@@ -75,13 +71,8 @@ ENCOUNTER_TOLERANCE_M = 1.0
 
 
 def shared_prefix_s(original: VariantResult, mutated: VariantResult, dt_s: float, upto: int) -> float:
-    """How long [s] the ego drives in ``mutated`` exactly as in ``original`` (its position to
-    within SAME_POSITION_M and, when both results carry it, its realised acceleration to within
-    SAME_ACCEL_MPS2), up to tick ``upto``. The acceleration is what shows the commands' departure
-    at once: an ego that waits at a light whose reference turns it off (or green) starts at the
-    first tick, and its commands differ from their first message, but it moves 1 cm only
-    0.55 s later (a campaign A1 variant), which the position alone counted as a shared prefix
-    longer than EARLY_S. A reference whose ego departs from the first frames
+    """How long [s] the ego drives in ``mutated`` exactly as in ``original`` (to within
+    SAME_POSITION_M), up to tick ``upto``. A reference whose ego departs from the first frames
     (a visible actor's whole path shifted, so the ego reacts at once) makes /control change at
     the start and Algorithm 1 end there; one whose ego departs later (an entity changed before
     the ego reacts to it, a speed changed from some time on) leaves the diff the accident's
@@ -89,10 +80,6 @@ def shared_prefix_s(original: VariantResult, mutated: VariantResult, dt_s: float
     start while the ego waits (it cannot react yet) is a good reference."""
     n = min(upto, len(original.ego_xy), len(mutated.ego_xy))
     departed = np.hypot(*(mutated.ego_xy[:n] - original.ego_xy[:n]).T) > SAME_POSITION_M
-    if original.ego_accel is not None and mutated.ego_accel is not None:
-        n = min(n, len(original.ego_accel), len(mutated.ego_accel))
-        departed = departed[:n] | (np.abs(mutated.ego_accel[:n] - original.ego_accel[:n])
-                                   > SAME_ACCEL_MPS2)
     first = int(np.argmax(departed)) if departed.any() else n
     return first * dt_s
 

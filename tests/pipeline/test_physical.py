@@ -69,27 +69,6 @@ def test_the_shared_prefix_ends_where_the_ego_departs():
     assert shared_prefix_s(original, _result(ego_moved, actors), 0.1, 10) == pytest.approx(0.6)
 
 
-def test_the_shared_prefix_ends_where_the_ego_s_acceleration_departs():
-    # an ego that waits at a light: in the reference (light off) its commands start it at the
-    # first tick, 0.5 m/s^2 through the actuators' lag; its position moves 1 cm only later
-    dt = 0.05
-    n = 40
-    stand = np.zeros((n, 2))
-    original = VariantResult(None, stand, np.zeros((n, 0, 2)), np.zeros(n))
-    accel = np.where(np.arange(n) >= 1, 0.5, 0.0)
-    speed = np.concatenate(([0.0], np.cumsum(accel[:-1]) * dt))
-    x = np.concatenate(([0.0], np.cumsum(speed[:-1]) * dt))
-    starts = VariantResult(None, np.stack([x, 0 * x], axis=1), np.zeros((n, 0, 2)), accel)
-    assert shared_prefix_s(original, starts, dt, n) == pytest.approx(dt)
-    # without the acceleration (a result that does not carry it) the position decides
-    by_position = shared_prefix_s(_result(stand, np.zeros((n, 0, 2))),
-                                  _result(starts.ego_xy, np.zeros((n, 0, 2))), dt, n)
-    assert by_position >= 0.2
-    # an acceleration within SAME_ACCEL_MPS2 is the same
-    nudged = VariantResult(None, stand, np.zeros((n, 0, 2)), np.full(n, 0.005))
-    assert shared_prefix_s(original, nudged, dt, n) == pytest.approx(n * dt)
-
-
 def test_a_world_where_the_ego_stops_short_of_the_accident_is_no_reference():
     from rocas.pipeline.physical_phase import reference_violation
     from rocas.sim.oracles import Outcome
