@@ -17,7 +17,8 @@ The verdict on the answer:
   disagrees, or substitution but not more than half of the references;
 - ``unstable``: neither does: do not act on the answer alone.
 
-An answer Algorithm 1 found without a change point on the control channel (its fallback,
+An answer Algorithm 1 found without a change point on the control channel that times its
+departure (none, or one in the first bin after the start: its fallback,
 :mod:`rocas.analysis.pinpoint`) is at most ``contested``: it rests on the earliest departure
 among the modules the commands depend on, not on a walk back from the commands' own change.
 """
@@ -259,8 +260,8 @@ def note(result: dict[str, Any]) -> str:
         if second["stance"] == "disagrees" and second.get("module"):
             text += f" ({second['module']})"
     if result["answers"][result.get("adopted", 0)].get("fallback"):
-        text += ("; found without a change point on the control channel (Algorithm 1's "
-                 "fallback), so at most contested")
+        text += ("; found without a change point on the control channel that times its "
+                 "departure (Algorithm 1's fallback), so at most contested")
     if result["level"] == "unstable":
         text += (". Unstable: neither most references nor module substitution support it; "
                  "do not act on it alone")
