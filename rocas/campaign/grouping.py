@@ -5,8 +5,11 @@ A root cause is read from an analysis's report (:func:`root_cause_keys`):
 - ``misconfiguration``: the deviating module and the misconfigured parameter(s), each with the
   direction of its fix (``planning: planning.min_overtake_distance_m up``);
 - ``no_configuration_fix``: the deviating module and the kind of trigger, the triggering
-  entity's kind and the property the reference changed (``perception: no configuration fix;
-  trigger vegetation enabled``): a missing feature shows itself through what sets it off;
+  entity's kind (``perception: no configuration fix; trigger vegetation``): a missing feature
+  shows itself through what sets it off. Not the property the reference changed: that is the
+  physical search's choice among the worlds that avoid the accident (the car that rear-ends
+  the stopped ego slowed in one analysis, moved aside in another), not a property of the
+  accident, and splitting by it made one mechanism two groups;
 - ``no_reference`` and ``not_reproduced``: the verdict alone.
 
 A misconfiguration has more than one name when the analysis found nearly-as-small fixes
@@ -59,11 +62,10 @@ def _directions(misconfiguration: Sequence[dict[str, Any]]) -> set[str]:
 
 
 def trigger_kind(report: dict[str, Any]) -> str:
-    """The kind of trigger: the triggering entity's kind and the property the reference
-    changed (its last name part), e.g. "vehicle lateral_offset_m"."""
+    """The kind of trigger: the triggering entity's kind, e.g. "vehicle" (see the module
+    docstring for why not the property the reference changed)."""
     trig = report.get("triggering_entity") or {}
-    props = sorted({p["name"].rsplit(".", 1)[-1] for p in trig.get("properties", [])})
-    return f"{trig.get('kind') or 'unknown'} {', '.join(props) or 'unknown'}"
+    return trig.get("kind") or "unknown"
 
 
 def _named_fixes(report: dict[str, Any]) -> list[tuple[str, Sequence[dict[str, Any]]]]:

@@ -19,7 +19,11 @@ def test_keys_name_module_parameters_and_directions():
     nofix = {"verdict": "no_configuration_fix", "deviating_module": "perception",
              "triggering_entity": {"kind": "vegetation",
                                    "properties": [{"name": "area.hedge.enabled"}]}}
-    assert root_cause_keys(nofix) == ["perception: no configuration fix; trigger vegetation enabled"]
+    assert root_cause_keys(nofix) == ["perception: no configuration fix; trigger vegetation"]
+    # the property the reference changed is the search's choice, not part of the cause
+    moved = {**nofix, "triggering_entity": {"kind": "vegetation",
+                                            "properties": [{"name": "area.hedge.height_m"}]}}
+    assert root_cause_keys(moved) == root_cause_keys(nofix)
     assert root_cause_keys({"verdict": "no_reference"}) == ["no reference"]
 
 
