@@ -7,9 +7,11 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rocas._fs import write_text_atomic
 from rocas.errors import ScenarioError
-from rocas.pipeline.evaluate import Accident, VariantTask, evaluate, is_accident
+from rocas.pipeline.evaluate import Accident, VariantResult, VariantTask, evaluate, is_accident
 from rocas.pipeline.rundir import Run, damaged
 from rocas.scenarios.model import Scenario
 
@@ -18,6 +20,7 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
     from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
     from rocas.stacks.rollout import simulate
 
+    ran: tuple[Any, np.ndarray, np.ndarray] | None = None  # (outcome, ego, actors) of the run
     if run.done("replay"):
         try:
             run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
@@ -34,6 +37,8 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
             recon = replay_mod.reconstruct(recording)
             report = replay_mod.replay(recon, output=run.out / "accident.mcap")
             scenario = recon.scenario
+            assert report.ego is not None and report.actors is not None
+            ran = (report.outcome, report.ego, report.actors)
             # the replay figures of the report: the recorded accident (None: the recording
             # holds none), the replay's, and how closely the ego followed its recorded pose
             result = {"source": "recording", "reproduced": bool(report.reproduced),
@@ -53,6 +58,7 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
         else:
             assert scenario is not None
             res = simulate(scenario, output=run.out / "accident.mcap")
+            ran = (res.outcome, res.ego, res.actors)
             acc = Accident.of(res.outcome)
             result = {"source": "scenario", "reproduced": is_accident(res.outcome),
                       "recorded_accident": None, "accident": acc.to_json() if acc else None,
@@ -62,8 +68,16 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
         write_text_atomic(run.out / "scenario.json", json.dumps(scenario_to_dict(scenario), indent=1))
         write_text_atomic(run.out / "replay.json", json.dumps(result, indent=1))
         run.finish("replay", result, time.perf_counter() - t0, 1)
-    # the original run's trajectories are re-simulated (deterministic) rather than stored
-    (orig,) = evaluate(run.executor, [VariantTask(run.scenario, (), run.scenario.seed)])
+    if ran is not None:
+        # the run just recorded is the original run (same scenario, no overrides, the
+        # scenario's seed; recording mode steps the very same loop): it is not simulated twice
+        outcome, ego, actors = ran
+        orig = VariantResult(outcome, np.ascontiguousarray(ego[:, :2]),
+                             np.ascontiguousarray(actors[:, :, :2]))
+    else:
+        # a resumed run: the original's trajectories are re-simulated (deterministic) rather
+        # than stored
+        (orig,) = evaluate(run.executor, [VariantTask(run.scenario, (), run.scenario.seed)])
     run.original = orig
     run.accident = Accident.of(orig.outcome)
     dt = run.scenario.dt_s

@@ -46,6 +46,7 @@ class ReplayReport:
         output: the replay's recording, or None.
         wall_time_s: seconds spent simulating.
         ego: (T+1, 5) the replay's ego trajectory; times: (T+1,) [s].
+        actors: (T+1, A, 4) the replay's actor trajectories (x, y, yaw, speed).
         reconstruction: what was replayed.
     """
 
@@ -64,6 +65,7 @@ class ReplayReport:
     times: np.ndarray | None = None
     reconstruction: Reconstruction | None = None
     only_emergency: bool = False
+    actors: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -182,7 +184,7 @@ def replay(source: Reconstruction | str | os.PathLike[str],
         original=rec.original, outcome=run.outcome, ego_rmse_m=rmse, ego_max_error_m=worst,
         compared_until_s=until, time_error_s=terr, params=params,
         output=run.recording, wall_time_s=wall, ego=run.ego, times=run.times,
-        reconstruction=rec)
+        reconstruction=rec, actors=run.actors)
 
 
 __all__ = ["ReplayReport", "TIME_TOLERANCE_S", "accident_of", "emergency_before_collision",
