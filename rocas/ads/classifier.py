@@ -82,8 +82,9 @@ def camera_view(
         col_rgb = np.zeros((n, CAMERA_COLUMNS, 3))
     else:
         best = np.argmax(value, axis=1)  # (N, C) nearest-looking object per column
-        col_size = np.take_along_axis(value, best[:, None, :], 1)[:, 0, :]
-        col_rgb = np.take_along_axis(rgb, best[..., None], 1) * col_size[..., None]
+        rows = np.arange(n)[:, None]  # gathers of the chosen object (as take_along_axis)
+        col_size = value[rows, best, np.arange(CAMERA_COLUMNS)]
+        col_rgb = rgb[rows, best] * col_size[..., None]
     col_rgb = clip(col_rgb + glare[:, None, None], 0.0, 1.0)
     return np.concatenate([col_size[..., None], col_rgb], axis=-1).reshape(n, FEATURES)
 

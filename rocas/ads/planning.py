@@ -233,7 +233,7 @@ class Planning:
             k_in[sub] = np.argmax(over, axis=-1)
             s_lo[sub] = np.min(np.where(over, sk - lon_k, np.inf), -1)
             s_hi[sub] = np.max(np.where(over, sk + lon_k, -np.inf), -1)
-        t_in = np.take_along_axis(pred.traj_t, k_in, axis=1)
+        t_in = pred.traj_t[self.rows[:, None], k_in]
         # a vehicle going the ego's way whose body is clear of the swept width, now and along its
         # forecast, but inside the lateral buffer is not followed: the ego only declines to draw
         # level with it (the hold below)
@@ -275,8 +275,8 @@ class Planning:
         has = sel >= 0
         selc = clip(sel, 0, max(per.tl_color.shape[1] - 1, 0))
         if per.tl_color.shape[1]:
-            col = np.take_along_axis(per.tl_color, selc[:, None], 1)[:, 0]
-            dist = np.take_along_axis(per.tl_distance, selc[:, None], 1)[:, 0]
+            col = per.tl_color[self.rows, selc]
+            dist = per.tl_distance[self.rows, selc]
         else:
             col = np.zeros(n, dtype=np.int64)
             dist = np.full(n, inf)

@@ -311,6 +311,8 @@ def _settle(run: Run, trail: list[Mutation]
     (``{"mutation", "module", "departed"}``, in the order tried) and its recording (None when
     the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
+    from rocas.pipeline.confidence import record_reference
+    from rocas.search.executor import done_future, submit
     from rocas.stacks.rollout import simulate
 
     scn = run.scenario
@@ -321,15 +323,26 @@ def _settle(run: Run, trail: list[Mutation]
 
     def departed(k: int) -> list[str]:
         path = run.out / f"shrink_{k}.mcap"
-        simulate(apply_physical(scn, trail[k]), output=path)
+        if k not in early:
+            simulate(apply_physical(scn, trail[k]), output=path)
+        else:
+            early.pop(k).result()
         found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s).to_json()
         modules = sorted(m["name"] for m in found["modules"] if m["change_point_s"] is not None)
         checked.append({"mutation": dict(trail[k].values), "module": found["deviating_module"],
                         "departed": modules})
         return modules
 
+    # the unshrunk reference and the most shrunk step are both recorded whatever the diffs
+    # say: the first is recorded on a worker (when there is one) while this process records
+    # the second; the recordings are the same wherever they are made
+    last = len(trail) - 1
+    early = {0: submit(run.executor, record_reference, apply_physical(scn, trail[0]),
+                       run.out / "shrink_0.mcap")}
+    early[last] = done_future(record_reference, apply_physical(scn, trail[last]),
+                              run.out / f"shrink_{last}.mcap")
     want = departed(0)
-    for k in range(len(trail) - 1, 0, -1):
+    for k in range(last, 0, -1):
         if departed(k) == want:
             return trail[k], checked, run.out / f"shrink_{k}.mcap"
     return trail[0], checked, run.out / "shrink_0.mcap"

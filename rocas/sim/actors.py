@@ -110,6 +110,7 @@ class _Statics:
     lat_reach: np.ndarray   # (N, A, A + 1) lateral distance within which another is ahead [m]
     lon_reach: np.ndarray   # (N, A, A + 1) centre distance of two touching bodies [m]
     rows: np.ndarray        # (N, 1) batch index
+    cols: np.ndarray        # (1, A) actor index
     path_rows: np.ndarray   # (N, A, 1) first sample of each path in the flattened paths
 
 
@@ -130,7 +131,7 @@ def _statics(world: BatchWorld) -> _Statics:
             not_self=~np.eye(a, a + 1, dtype=bool)[None],
             lat_reach=(world.actor_dims[..., 1:2] + ow[:, None, :]) / 2 + 0.3,
             lon_reach=(world.actor_dims[..., 0:1] + ol[:, None, :]) / 2,
-            rows=np.arange(n)[:, None], path_rows=path_rows(world.actor_path)[..., None])
+            rows=np.arange(n)[:, None], cols=np.arange(a)[None, :], path_rows=path_rows(world.actor_path)[..., None])
         _STATICS[world] = got
     return got
 
@@ -179,7 +180,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     pts = world.actor_path.reshape(-1, 2)[st.path_rows + cand]  # (N, A, W, 2)
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
-    v_idx = np.take_along_axis(cand, best[..., None], -1)[..., 0]
+    v_idx = cand[st.rows, st.cols, best]
     # points: move along the path
     v_pt = np.maximum(fa.speed + accel * dt, 0.0)
     s_pt = state.s + 0.5 * (b.speed + v_pt) * dt

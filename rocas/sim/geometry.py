@@ -192,5 +192,24 @@ def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndar
     cand = grid.query(x, y)
     pts = grid.points[cand]  # (..., K, 2): one gather
     d2 = (pts[..., 0] - x[..., None]) ** 2 + (pts[..., 1] - y[..., None]) ** 2
-    j = np.argmin(d2, axis=-1)[..., None]
-    return (np.take_along_axis(cand, j, -1)[..., 0], np.take_along_axis(d2, j, -1)[..., 0])
+    # the argmin's entries, gathered from flat rows (what take_along_axis does, without its
+    # Python overhead)
+    k = cand.shape[-1]
+    c2, d22 = cand.reshape(-1, k), d2.reshape(-1, k)
+    rows = _arange(c2.shape[0])
+    j = d22.argmin(axis=1)
+    shape = cand.shape[:-1]
+    return c2[rows, j].reshape(shape), d22[rows, j].reshape(shape)
+
+
+_ARANGES: dict[int, np.ndarray] = {}
+
+
+def _arange(n: int) -> np.ndarray:
+    """``np.arange(n)``, made once per n (read-only)."""
+    out = _ARANGES.get(n)
+    if out is None:
+        out = np.arange(n)
+        out.flags.writeable = False
+        _ARANGES[n] = out
+    return out

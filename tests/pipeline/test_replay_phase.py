@@ -65,3 +65,39 @@ def test_a_resumed_replay_re_simulates_the_original(tmp_path: Path) -> None:
     assert resumed.original is not None and first.original is not None
     _same(resumed.original, first.original)
     assert resumed.accident == first.accident and resumed.accident_tick == first.accident_tick
+
+
+class _Submitting(SerialExecutor):
+    """A serial executor with ``submit`` (as LocalExecutor's), noting what it was given."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.submitted: list[str] = []
+
+    def submit(self, fn, *args):  # noqa: ANN001, ANN201
+        from rocas.search.executor import done_future
+
+        self.submitted.append(Path(args[-1]).name)
+        return done_future(fn, *args)
+
+
+def test_the_shrink_check_records_the_unshrunk_reference_apart_with_the_same_answer(
+        tmp_path: Path) -> None:
+    """Phase II's shrink check always records the unshrunk reference and the most shrunk step:
+    the first is handed to a worker while this process records the second, and what it finds
+    is what it finds with everything recorded here."""
+    from rocas.pipeline.physical_phase import _settle
+    from rocas.search.space import Mutation
+
+    trail = [Mutation({"actor.obstacle_1.color": "black"}),
+             Mutation({"actor.obstacle_1.color": "blue"})]
+    found = []
+    for name, executor in (("serial", SerialExecutor()), ("worker", _Submitting())):
+        run = _run(tmp_path / name, executor)
+        (tmp_path / name).mkdir()
+        phase_replay(run, None, RECORDINGS / "a09_red_truck_roundabout.mcap")
+        small, checked, path = _settle(run, trail)
+        found.append((small, checked, path.name if path else None))
+        if name == "worker":
+            assert executor.submitted == ["shrink_0.mcap"]
+    assert found[0] == found[1]
