@@ -131,7 +131,8 @@ def _statics(world: BatchWorld) -> _Statics:
             not_self=~np.eye(a, a + 1, dtype=bool)[None],
             lat_reach=(world.actor_dims[..., 1:2] + ow[:, None, :]) / 2 + 0.3,
             lon_reach=(world.actor_dims[..., 0:1] + ol[:, None, :]) / 2,
-            rows=np.arange(n)[:, None], cols=np.arange(a)[None, :], path_rows=path_rows(world.actor_path)[..., None])
+            rows=np.arange(n)[:, None], cols=np.arange(a)[None, :],
+            path_rows=path_rows(world.actor_path)[..., None])
         _STATICS[world] = got
     return got
 
