@@ -94,7 +94,7 @@ def render(result: DiffResult, env: Env) -> None:
     from rich.table import Table
     from rich.text import Text
 
-    from rocas.analysis.diff import entries_text
+    from rocas.analysis.entries import entries_text
 
     out = env.out()
     p = result.pinpoint

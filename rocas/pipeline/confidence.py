@@ -167,7 +167,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
 def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     """A reference's answer from its diff (``found``: the diff's JSON or the diff phase's
     summary): Algorithm 1's walk, or the walk with the departures where content entered both
-    runs passed over (``found["entries"]``, :func:`rocas.analysis.diff.entries_to_pass`)
+    runs passed over (``found["entries"]``, :func:`rocas.analysis.entries.entries_to_pass`)
     when the two name different modules and module substitution (``opinion``) supports the
     second and not the first.
 

@@ -110,7 +110,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
 
 def entries_passed_text(report: dict[str, Any]) -> str:
     """Why the walk passed over departures where content entered both runs (one clause)."""
-    from rocas.analysis.diff import entries_text
+    from rocas.analysis.entries import entries_text
 
     return (entries_text(report["entries_passed"], report["deviating_module"])
             + "; module substitution disagrees with the module named at those departures")

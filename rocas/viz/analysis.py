@@ -509,7 +509,7 @@ def _log_diff_json(rec: Any, data: dict[str, Any]) -> None:
         text += f"\nNote: {data['fallback']}.\n"
     entries = data.get("entries")
     if entries and entries["deviating_module"] != module:
-        from rocas.analysis.diff import entries_text
+        from rocas.analysis.entries import entries_text
 
         text += f"\nNote: {entries_text(entries['channels'], entries['deviating_module'])}.\n"
     rec.log("diff/report", rr.TextDocument(text, media_type="text/markdown"), static=True)

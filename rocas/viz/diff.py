@@ -342,7 +342,7 @@ def report_markdown(result: DiffResult) -> str:
         lines += ["", f"Note: {p.fallback}."]
     e = result.entries
     if e is not None and e.deviating_module != p.deviating_module:
-        from rocas.analysis.diff import entries_text
+        from rocas.analysis.entries import entries_text
 
         entered = {c.topic: c.entered_s for c in result.channels if c.entered_s is not None}
         lines += ["", f"Note: {entries_text(entered, e.deviating_module)}."]

@@ -1,4 +1,4 @@
-"""Departures where content enters both runs at once (diff.entries_to_pass): a four-module
+"""Departures where content enters both runs at once (analysis.entries): a four-module
 pipeline in which an obstacle comes into view as a bus in one run and a truck in the other."""
 
 from pathlib import Path
