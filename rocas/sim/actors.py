@@ -86,9 +86,10 @@ def initial_actors(world: BatchWorld) -> ActorState:
     ahead, wb = axle_geometry(world.actor_kind, world.actor_model)
     ahead = np.broadcast_to(ahead, world.actor_start_s.shape)
     path, ph, ds = world.actor_path, world.actor_path_heading, world.actor_path_ds
+    last = _statics(world).last
     s = world.actor_start_s + ahead  # the front axle, ahead of the centre's arc length
-    x, y, h = path_point(path, ph, ds, s)
-    rx, ry, _ = path_point(path, ph, ds, s - wb)
+    x, y, h = path_point(path, ph, ds, s, last)
+    rx, ry, _ = path_point(path, ph, ds, s - wb, last)
     bx, by, byaw = trail_body(x, y, rx, ry, h, ahead, wb)
     v = profile_speed(0.0, world.actor_profile_t, world.actor_profile_v)
     idx = np.round(s / np.maximum(ds, 1e-9)).astype(np.int64)
@@ -112,6 +113,8 @@ class _Statics:
     rows: np.ndarray        # (N, 1) batch index
     cols: np.ndarray        # (1, A) actor index
     path_rows: np.ndarray   # (N, A, 1) first sample of each path in the flattened paths
+    last: np.ndarray        # (N, A) highest sample position a path is read at
+    last_index: np.ndarray  # (N, A, 1) index of each path's last own sample
 
 
 _STATICS: weakref.WeakKeyDictionary[BatchWorld, _Statics] = weakref.WeakKeyDictionary()
@@ -132,7 +135,9 @@ def _statics(world: BatchWorld) -> _Statics:
             lat_reach=(world.actor_dims[..., 1:2] + ow[:, None, :]) / 2 + 0.3,
             lon_reach=(world.actor_dims[..., 0:1] + ol[:, None, :]) / 2,
             rows=np.arange(n)[:, None], cols=np.arange(a)[None, :],
-            path_rows=path_rows(world.actor_path)[..., None])
+            path_rows=path_rows(world.actor_path)[..., None],
+            last=world.actor_path_count - 1.000001,
+            last_index=(world.actor_path_count - 1)[..., None])
         _STATICS[world] = got
     return got
 
@@ -172,12 +177,11 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     # vehicles: pure pursuit through the bicycle model
     ds = st.ds
     tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds,
-                           state.s + pursuit_lookahead(fa.speed))
+                           state.s + pursuit_lookahead(fa.speed), st.last)
     kappa = pursuit_curvature(fa.x, fa.y, fa.yaw, tx, ty)
     veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], st.grip, dt)
     # project vehicles back on their path (local window)
-    p = world.actor_path.shape[2]
-    cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, p - 1)
+    cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, st.last_index)
     pts = world.actor_path.reshape(-1, 2)[st.path_rows + cand]  # (N, A, W, 2)
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
@@ -185,7 +189,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     # points: move along the path
     v_pt = np.maximum(fa.speed + accel * dt, 0.0)
     s_pt = state.s + 0.5 * (b.speed + v_pt) * dt
-    px2, py2, ph2 = path_point(world.actor_path, world.actor_path_heading, ds, s_pt)
+    px2, py2, ph2 = path_point(world.actor_path, world.actor_path_heading, ds, s_pt, st.last)
     is_veh = st.is_veh
     guide = VehicleState(
         x=np.where(is_veh, veh.x, px2), y=np.where(is_veh, veh.y, py2),

@@ -100,11 +100,14 @@ def profile_speed(t: float, knots_t: np.ndarray, knots_v: np.ndarray) -> np.ndar
     return (v0 + u * (v1 - v0)).reshape(knots_t.shape[:-1])
 
 
-def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Interpolate equally spaced paths (N, A, P, 2) at arc length s (N, A) -> x, y, heading."""
+def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndarray,
+               last: np.ndarray | float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Interpolate equally spaced paths (N, A, P, 2) at arc length s (N, A) -> x, y, heading.
+
+    ``last``: the highest sample position to read each path at ((N, A), or one number; None:
+    P - 1.000001, every sample)."""
     p = path.shape[-2]
-    f = clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001)
+    f = clip(s / np.maximum(ds, 1e-9), 0.0, p - 1.000001 if last is None else last)
     i = f.astype(np.int64)
     u = f - i
     # one gather on the flattened paths: indexing with three broadcast index arrays costs

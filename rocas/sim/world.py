@@ -220,6 +220,10 @@ class BatchWorld:
         actor_color: (N, A) colour code (index into COLOR_NAMES).
         actor_path: (N, A, P, 2) [m]; actor_path_ds: (N, A) spacing [m];
         actor_path_heading: (N, A, P) [rad]; actor_start_s: (N, A) [m].
+        actor_path_count: (N, A) int, the samples of each path: each variant samples its
+            paths as it would alone, and the samples past its count repeat its last one (P is
+            the batch's largest count), so a variant's result does not depend on the batch it
+            is in.
         actor_profile_t, actor_profile_v: (N, A, K) speed-profile knots [s], [m/s].
         actor_reactive: (N, A) bool; actor_reactive_gap: (N, A) [m].
         object_kind: (N, E); object_pos: (N, E, 2); object_yaw: (N, E); object_dims: (N, E, 3).
@@ -246,6 +250,7 @@ class BatchWorld:
     actor_path: np.ndarray
     actor_path_ds: np.ndarray
     actor_path_heading: np.ndarray
+    actor_path_count: np.ndarray
     actor_start_s: np.ndarray
     actor_profile_t: np.ndarray
     actor_profile_v: np.ndarray
@@ -315,14 +320,22 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
     nl = len(first.traffic_lights)
     kind_code = {"vehicle": KIND_VEHICLE, "cyclist": KIND_CYCLIST, "pedestrian": KIND_PEDESTRIAN}
     paths = [[_actor_path(s, i) for i in range(na)] for s in scenarios]
-    lengths = [[_length(p) for p in row] for row in paths]
-    npts = max([int(math.ceil(length / ACTOR_PATH_SPACING_M)) + 1
-                for row in lengths for length in row] + [2])
+    # each variant samples its paths with its own count (as alone in a batch); a batch-wide
+    # count made a variant's result depend on the other variants' path lengths
+    counts = [max([int(math.ceil(_length(p) / ACTOR_PATH_SPACING_M)) + 1 for p in row] + [2])
+              for row in paths]
+    npts = max(counts)
     actor_path = np.zeros((n, na, npts, 2))
+    actor_heading = np.zeros((n, na, npts))
     actor_ds = np.zeros((n, na))
-    for v in range(n):
+    for v, c in enumerate(counts):
         for i in range(na):
-            actor_path[v, i], actor_ds[v, i] = resample_polyline(paths[v][i], npts)
+            actor_path[v, i, :c], actor_ds[v, i] = resample_polyline(paths[v][i], c)
+        if na:
+            actor_path[v, :, c:] = actor_path[v, :, c - 1:c]
+            actor_heading[v, :, :c] = polyline_headings(actor_path[v, :, :c])
+            actor_heading[v, :, c:] = actor_heading[v, :, c - 1:c]
+    actor_count = np.broadcast_to(np.asarray(counts, dtype=np.int64)[:, None], (n, na))
     kmax = max([len(a.speed_profile) for s in scenarios for a in s.actors] + [1])
     prof_t = np.zeros((n, na, kmax))
     prof_v = np.zeros((n, na, kmax))
@@ -361,8 +374,8 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
         actor_rgb=arr(lambda s: [COLORS[a.color] for a in s.actors], (na, 3)),
         actor_color=arr(lambda s: [COLOR_NAMES.index(a.color) for a in s.actors], (na,),
                         np.int64),
-        actor_path=actor_path, actor_path_ds=actor_ds,
-        actor_path_heading=polyline_headings(actor_path) if na else np.zeros((n, 0, npts)),
+        actor_path=actor_path, actor_path_ds=actor_ds, actor_path_heading=actor_heading,
+        actor_path_count=actor_count,
         actor_start_s=arr(lambda s: [a.start_s_m for a in s.actors], (na,)),
         actor_profile_t=prof_t, actor_profile_v=prof_v,
         actor_reactive=arr(lambda s: [a.reactive for a in s.actors], (na,), bool),
