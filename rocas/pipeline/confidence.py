@@ -178,10 +178,12 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     approaching from behind, whatever its configuration) or wrong (a planner that misjudges
     the car once it is seen). The diff alone cannot tell; module
     substitution can: when Algorithm 1's module was named at such an entry (its first
-    departure is one, ``named_at_entry``), and substitution disagrees with it and either
-    supports the module the walk reaches past the entries or finds the accident avoidable
-    (ground truth in some module, or in all together, removes it), the second is the answer;
-    when ground truth avoids nothing, the module named at the entry stands. An answer Algorithm 1
+    departure is one, ``named_at_entry``), and substitution disagrees with it but supports
+    the module the walk reaches past the entries, the second is the answer. A weaker rule
+    (substitution finds the accident avoidable somewhere) was tried and dropped: catalog A8's
+    hedge hides the car in one run only, and ground truth in perception and prediction
+    together avoids the accident, which points upstream, not at the control module the walk
+    past the entry reaches. An answer Algorithm 1
     reached otherwise stands: passing entries over can also expose another channel of a
     module (an A2 variant's brake signal) that the walk did not need.
     """
@@ -192,13 +194,8 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     entries = found.get("entries")
     if (opinion is None or not entries or entries["deviating_module"] == answer["module"]
             or not entries.get("named_at_entry")
-            or opinion.stance(answer["module"]) != "disagrees"):
-        return answer
-    # substitution supports the walk past the entries, or at least says the accident is one a
-    # module could avoid (ground truth somewhere removes it), just not the one named at the
-    # entry; when nothing avoids it (a car from behind), the module named at the entry stands
-    avoidable = opinion.module is not None or opinion.jointly_avoided
-    if opinion.stance(entries["deviating_module"]) not in _SUPPORTS and not avoidable:
+            or opinion.stance(answer["module"]) != "disagrees"
+            or opinion.stance(entries["deviating_module"]) not in _SUPPORTS):
         return answer
     return {"module": entries["deviating_module"], "path": entries["path"],
             "fallback": entries["fallback"], "entries_passed": entries["channels"]}
