@@ -58,7 +58,7 @@ class ChannelDiff:
         mdr_after: mean MDR from t* on; None without t*.
         only_in: "accident"/"reference" for a channel present in one recording only.
         schema: the schema name.
-        entered_s: when content entered the channel and the runs began to differ, the runs being
+        entered_s: when content entered the channel in both runs at once, the two runs being
             the same until then (:func:`entries_to_pass`) [s]; None otherwise.
         after_entry: the change points found from that bin on (None without an entry).
     """
@@ -92,7 +92,7 @@ class DiffResult:
         bin_s: bin width [s]; delta_s: Algorithm 1's window [s].
         messages_read: decoded messages (accident, reference).
         warnings: damage and skips found while reading, one line each.
-        entries: Algorithm 1's result with the departures where content entered the runs
+        entries: Algorithm 1's result with the departures where content entered both runs
             passed over (:func:`entries_to_pass`), when there were any; None otherwise.
     """
 
@@ -117,7 +117,7 @@ class DiffResult:
 
     @property
     def named_at_entry(self) -> bool:
-        """Whether Algorithm 1's module departs first where content entered the runs: its
+        """Whether Algorithm 1's module departs first where content entered both runs: its
         t* is the entry time of a channel it writes whose entry was passed over."""
         m = self.pinpoint.deviating_module
         t = self.pinpoint.t_star.get((MODULE, m)) if m else None

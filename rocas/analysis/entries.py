@@ -1,10 +1,9 @@
-"""Content entering a channel mid-run: departures the diff passes over (docs/algorithms.md).
+"""Content that enters both runs at once: departures the diff passes over (docs/algorithms.md).
 
 Two runs that differ in an entity differ on a channel from the moment that entity is in it.
 When it is there from the first message, the difference is the series' level from the start
 and no change point marks it. When it comes into view later, both runs are the same until
-then and the series steps up at that bin (content entering both runs at once, or one
-first); :func:`entries_to_pass` finds such steps, and
+then and the series steps up at that bin; :func:`entries_to_pass` finds such steps, and
 :func:`change_points_from` finds a channel's change points from its entry on.
 """
 
@@ -28,23 +27,22 @@ ENTRY_LAG_S = 0.2
 def entries_to_pass(
     series: dict[str, ChannelSeries], graph: ChannelModuleGraph
 ) -> dict[str, int]:
-    """The channels whose first difference is content entering, and the bin it entered at
-    (an index into the channel's series).
+    """The channels whose first difference is content entering both runs, and the bin it
+    entered at (an index into the channel's series).
 
     Two runs that differ in an entity differ on a channel from the moment that entity is in
     it. When it is there from the first message, the difference is the series' level from
     the start, and no change point marks it (the paper's premise: the first seconds are the
     baseline). When it comes into view later (an obstacle entering perception's range in
-    both runs at the same tick, a bus in one and a truck in the other; or in one run a tick
-    before the other, a little faster there), the two executions are the same up to that
-    tick, and the series steps up there. That step is the same difference met later: the
-    executions' common start, not a module departing from the other run. So an entry
-    (:attr:`ChannelSeries.entered` at the channel's first differing bin) is passed over, and
-    the channel's change points are found from it on (:func:`change_points_from`), when it
-    is the executions' first difference (no channel differs in an earlier bin), or when it
-    follows, within :data:`ENTRY_LAG_S`, an entry passed over on a channel its writer reads
-    (the entry travelling down the pipeline). Once a channel has differed in another way, no
-    later entry is passed over.
+    both runs at the same tick, a bus in one and a truck in the other), the two executions
+    are the same up to that tick, and the series steps up there. That step is the same
+    difference met later: the executions' common start, not a module departing from the
+    other run. So an entry (:attr:`ChannelSeries.entered` at the channel's first differing
+    bin) is passed over, and the channel's change points are found from it on
+    (:func:`change_points_from`), when it is the executions' first difference (no channel
+    differs in an earlier bin), or when it follows, within :data:`ENTRY_LAG_S`, an entry
+    passed over on a channel its writer reads (the entry travelling down the pipeline).
+    Once a channel has differed in another way, no later entry is passed over.
 
     Returns:
         topic -> index of the bin where content entered it.
@@ -83,7 +81,7 @@ def entries_text(channels: dict[str, float], module: str | None) -> str:
     """One sentence on the departures passed over (``channels``: topic -> entry time [s]) and
     what the walk names without them."""
     parts = [f"{t} at {at:.2f} s" for t, at in sorted(channels.items(), key=lambda x: (x[1], x[0]))]
-    return (f"content entered and the runs began to differ on {', '.join(parts)}, the runs "
+    return (f"content entered both runs and began to differ on {', '.join(parts)}, the runs "
             "being the same until then; with those departures passed over as the runs' common "
             f"start, the walk names {module or 'no module'}")
 

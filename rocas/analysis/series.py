@@ -64,11 +64,11 @@ class ChannelSeries:
         mdr: (n,) MDR of each such bin, in [0, 1].
         messages: (n, 2) message counts per bin in (accident, reference).
         only_in: "accident" or "reference" when the channel exists in one recording only.
-        entered: (n,) bool, True for a bin where content entered the channel and the two
-            runs began to differ: the previous bin's messages were equal, and from it to this
-            one the first message of neither run lost elements in its repeated fields and at
-            least one's gained some (an obstacle came into view in both runs, or in one
-            first). None when not computed.
+        entered: (n,) bool, True for a bin where the channel's content grew in both runs at
+            once and the two began to differ: the previous bin's messages were equal, and
+            from it to this one the first message of each run gained the same number of
+            elements in its repeated fields (an obstacle came into view in both). None when
+            not computed.
     """
 
     topic: str
@@ -106,22 +106,17 @@ def _decoded(e: _Entry) -> _Entry:
 
 
 def _entered(before: tuple[_Entry, _Entry], now: tuple[_Entry, _Entry]) -> bool:
-    """Whether content entered a channel from ``before`` (the first messages of a bin whose
-    messages were equal) to ``now`` (this bin's first messages, which differ): from one bin
-    to the next, no repeated field of either run's message loses elements and at least one
-    run's gains some (an obstacle came into view in both runs at once, or in one first)."""
+    """Whether the content of a channel grew the same way in both runs from ``before`` (the
+    first messages of a bin whose messages were equal) to ``now`` (this bin's first messages,
+    which differ): equal repeated-field lengths in the two runs at each bin, and from one bin
+    to the next no length shrinks and at least one grows."""
     la0 = repeated_lengths(_message(before[0]))
     # equal payloads are one message (decoded once)
     lb0 = la0 if before[0][3] == before[1][3] else repeated_lengths(_message(before[1]))
     la1, lb1 = (repeated_lengths(_message(e)) for e in now)
-    if la0 != lb0 or not len(la0) == len(la1) == len(lb1):
+    if la0 != lb0 or la1 != lb1 or len(la0) != len(la1):
         return False
-    grew = False
-    for now_len in (la1, lb1):
-        if any(x < y for x, y in zip(now_len, la0, strict=True)):
-            return False
-        grew = grew or now_len != la0
-    return grew
+    return all(x >= y for x, y in zip(la1, la0, strict=True)) and la1 != la0
 
 
 def _score(a: _Entry, b: _Entry, tol: Tolerance) -> float:

@@ -171,12 +171,11 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     when the two name different modules and module substitution (``opinion``) supports the
     second and not the first.
 
-    Content that enters a channel mid-run and differs from its first message (a bus in one
-    run, a truck in the other, coming into view at the same tick; or a car a little faster in
-    one run, in view a tick earlier) makes its channel depart there, and Algorithm 1 names
-    the module that wrote it. That can be right (a perception that cannot see a car
-    approaching from behind, whatever its configuration) or wrong (a planner that misjudges
-    the car once it is seen). The diff alone cannot tell; module
+    Content that enters both runs at once and differs from its first message (a bus in one
+    run, a truck in the other, coming into view at the same tick) makes its channel depart
+    there, and Algorithm 1 names the module that wrote it. That can be right (a perception
+    that cannot see a car approaching from behind, whatever its configuration) or wrong (a
+    planner that misjudges the car once it is seen). The diff alone cannot tell; module
     substitution can: when Algorithm 1's module was named at such an entry (its first
     departure is one, ``named_at_entry``), and substitution disagrees with it but supports
     the module the walk reaches past the entries, the second is the answer. A weaker rule

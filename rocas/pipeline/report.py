@@ -65,7 +65,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "path": diff.get("path", []),
         # why the walk did not start at the control channel's change point (it had none)
         "walk_fallback": diff.get("fallback"),
-        # the departures where content entered the runs, passed over (module substitution
+        # the departures where content entered both runs, passed over (module substitution
         # disagreed with the module Algorithm 1 named at them): topic -> time [s]
         "entries_passed": diff.get("entries_passed"),
         "confidence": done.get("confidence"),
@@ -109,7 +109,7 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
 
 
 def entries_passed_text(report: dict[str, Any]) -> str:
-    """Why the walk passed over departures where content entered the runs (one clause)."""
+    """Why the walk passed over departures where content entered both runs (one clause)."""
     from rocas.analysis.entries import entries_text
 
     return (entries_text(report["entries_passed"], report["deviating_module"])

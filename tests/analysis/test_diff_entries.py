@@ -87,7 +87,7 @@ def test_the_terminal_and_the_markdown_say_what_the_walk_past_the_entries_names(
     assert res.code == 0, res.stderr
     text = " ".join(res.stdout.split())
     assert "Initial deviating module: perception" in text
-    assert "content entered and the runs began to differ on /obstacles at 2.00 s" in text
+    assert "content entered both runs and began to differ on /obstacles at 2.00 s" in text
     assert "the walk names planning" in text
     assert "the walk names planning" in report_markdown(diff(a, b))
 
