@@ -178,11 +178,9 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     planner that misjudges the car once it is seen). The diff alone cannot tell; module
     substitution can: when Algorithm 1's module was named at such an entry (its first
     departure is one, ``named_at_entry``), and substitution disagrees with it but supports
-    the module the walk reaches past the entries, the second is the answer. A weaker rule
-    (substitution finds the accident avoidable somewhere) was tried and dropped: catalog A8's
-    hedge hides the car in one run only, and ground truth in perception and prediction
-    together avoids the accident, which points upstream, not at the control module the walk
-    past the entry reaches. An answer Algorithm 1
+    the module the walk reaches past the entries, the second is the answer (a weaker rule,
+    substitution finding the accident avoidable somewhere, would take a module substitution
+    points away from: docs/algorithms.md). An answer Algorithm 1
     reached otherwise stands: passing entries over can also expose another channel of a
     module (an A2 variant's brake signal) that the walk did not need.
     """
