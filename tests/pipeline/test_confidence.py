@@ -103,8 +103,8 @@ def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
                "entries_passed": taken["entries_passed"]}
     assert _answer(summary, None)["module"] == "planning"
     # substitution names prediction, which is neither (an A11 variant of seed 131), or avoids
-    # the accident with perception and prediction together (catalog A8): it points upstream,
-    # not at the walk past the entry, and Algorithm 1's answer stands
+    # the accident only with perception and prediction together: it points upstream, not at
+    # the walk past the entry, and Algorithm 1's answer stands
     for opinion in (_Opinion(module="prediction", prediction="agrees"), _Opinion(jointly_avoided=True)):
         assert _answer(found, opinion)["module"] == "perception"
     # substitution clears both (a car from behind that nothing avoids: A7-like): Algorithm 1's
