@@ -180,9 +180,9 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     departure is one, ``named_at_entry``), and substitution disagrees with it but supports
     the module the walk reaches past the entries, the second is the answer (a weaker rule,
     substitution finding the accident avoidable somewhere, would take a module substitution
-    points away from: docs/algorithms.md). An answer Algorithm 1
-    reached otherwise stands: passing entries over can also expose another channel of a
-    module (an A2 variant's brake signal) that the walk did not need.
+    points away from: docs/algorithms.md). An answer Algorithm 1 reached otherwise stands:
+    passing entries over can also expose another channel of a module (an A2 variant's brake
+    signal) that the walk did not need.
     """
     answer = {"module": found["deviating_module"], "path": found["path"],
               "fallback": found.get("fallback")}
