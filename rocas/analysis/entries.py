@@ -62,18 +62,14 @@ def entries_to_pass(
     # the first difference that is not an entry ends the common start
     stop = min((t for t, _, entry in firsts if entry is None), default=math.inf)
     passed: dict[str, int] = {}
-    passed_at: dict[str, float] = {}
     for t, topic, entry in firsts:
         if entry is None or t > stop:
             continue
-        topo = graph.topology.get(topic)
-        writers = set(topo.writers) if topo else set()
-        inputs = [c for c, tp in graph.topology.items() if writers & set(tp.readers)]
+        inputs = [c for w in graph.writers_of(topic) for c in graph.channels_read_by(w)]
         if t == start or any(
-            c in passed_at and t - passed_at[c] <= ENTRY_LAG_S + 1e-9 for c in inputs
+            c in passed and t - series[c].times_s[passed[c]] <= ENTRY_LAG_S + 1e-9 for c in inputs
         ):
             passed[topic] = entry
-            passed_at[topic] = t
     return passed
 
 
