@@ -114,8 +114,6 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     chosen_diff = run.state["done"]["diff"]
     alternates = alternate_references(physical.get("front", []), physical["chosen"],
                                       run.cfg.alternate_references)
-    answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
-                **_answer(chosen_diff, None)}]
     # each alternate reference is simulated on a worker of its own while this process asks
     # module substitution: three independent simulations of half a second or so each; the
     # diffs (a few hundredths of a second) are taken here, which spares the workers the
@@ -125,13 +123,12 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     opinion = None
     if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
-    if opinion is not None:
-        answers[0] |= _answer(chosen_diff, opinion)
-        if answers[0].get("entries_passed"):
-            run.state["done"]["diff"] = chosen_diff = {
-                **chosen_diff, "deviating_module": answers[0]["module"],
-                "path": answers[0]["path"], "fallback": answers[0]["fallback"],
-                "entries_passed": answers[0]["entries_passed"]}
+    answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
+                **_answer(chosen_diff, opinion)}]
+    if answers[0].get("entries_passed"):  # the walk past the entries: the diff's answer now
+        run.state["done"]["diff"] = {
+            **chosen_diff, "deviating_module": answers[0]["module"], "path": answers[0]["path"],
+            "fallback": answers[0]["fallback"], "entries_passed": answers[0]["entries_passed"]}
     diffs: list[dict[str, Any] | None] = [None]
     for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
         job.result()
