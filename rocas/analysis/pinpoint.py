@@ -114,6 +114,7 @@ def find_initial_module(
     delta_s: float = 3.0,
     control_onset_s: float | None = None,
     bin_s: float | None = None,
+    past_window: bool = True,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -128,6 +129,9 @@ def find_initial_module(
         bin_s: the series' bin width [s]: a first change point of the control channel at or
             before it (the first bin after the start) counts as no change point, the commands
             differing from ``control_onset_s`` on. None: every change point counts.
+        past_window: when the walk names the control channel's own writer, go on from an input
+            of it that departed before the window (see :func:`_past_the_window`); False: the
+            paper's walk as written.
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -228,7 +232,7 @@ def find_initial_module(
             )
             exclusions[m] = f"not reachable from {control_channel}" + (f" ({why})" if why else "")
 
-    return PinpointResult(
+    result = PinpointResult(
         deviating_module=deviating,
         control_channel=control_channel,
         t_star=t_star,
@@ -237,6 +241,50 @@ def find_initial_module(
         path=path,
         exclusions=exclusions,
         fallback=fallback,
+    )
+    if past_window and fallback is None and deviating in cmg.writers_of(control_channel):
+        return _past_the_window(cmg, channel_t_star, result, delta_s)
+    return result
+
+
+def _past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float | None],
+                     found: PinpointResult, delta_s: float) -> PinpointResult:
+    """The walk that named the control channel's own writer, continued past the window.
+
+    Naming the writer of the commands says only that none of its inputs departed within
+    ``delta_s`` before them. When one departed earlier, the writer was not the first module to
+    deviate: the walk goes on from the latest such input (then by name), with the window again,
+    and :attr:`PinpointResult.fallback` says so. Deeper in the graph the window keeps its role
+    (an early harmless departure upstream of a module that departed within it is passed over).
+    """
+    writer = found.deviating_module
+    assert writer is not None
+    t_writer = found.t_star[(MODULE, writer)]
+    assert t_writer is not None
+    early = [(t, c) for c in cmg.channels_read_by(writer)
+             if (t := channel_t_star.get(c)) is not None and t < t_writer - delta_s]
+    if not early:
+        return found
+    t_in, channel = min(early, key=lambda tc: (-tc[0], tc[1]))
+    rest = find_initial_module(cmg, channel_t_star, channel, delta_s, past_window=False)
+    if rest.deviating_module is None or rest.deviating_module == writer:
+        return found
+    exclusions = {**found.exclusions, **rest.exclusions}
+    exclusions[writer] = (f"its input {channel} departed at {_fmt(t_in)}, more than "
+                          f"{delta_s:g} s before its own change point ({_fmt(t_writer)})")
+    exclusions.pop(rest.deviating_module, None)
+    note = (f"no input of {writer} departed within {delta_s:g} s before "
+            f"{found.control_channel} ({_fmt(t_writer)}), but {channel} departed earlier "
+            f"({_fmt(t_in)}), so the walk goes on from it")
+    return PinpointResult(
+        deviating_module=rest.deviating_module,
+        control_channel=found.control_channel,
+        t_star=found.t_star,
+        reachable=found.reachable | rest.reachable,
+        removed_edges=found.removed_edges,
+        path=found.path + rest.path,
+        exclusions=exclusions,
+        fallback=note,
     )
 
 

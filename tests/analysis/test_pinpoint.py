@@ -205,7 +205,7 @@ def test_walk_reachability_and_ties_match_networkx_on_random_graphs():
         t = {c: rng.choice([None, 1.0, 2.0, 2.5, 4.0]) for c in chans}
         control = rng.choice(chans)
         delta = rng.choice([1.0, 3.0])
-        r = find_initial_module(cmg, t, control, delta)
+        r = find_initial_module(cmg, t, control, delta, past_window=False)
         reachable, depth, rev = _networkx_walk(cmg, r.t_star, control, delta)
         assert r.reachable == reachable
         if r.deviating_module is None:
@@ -216,3 +216,29 @@ def test_walk_reachability_and_ties_match_networkx_on_random_graphs():
         ties += len(list(nx.all_shortest_paths(rev, (CHANNEL, control), target))) > 1
         assert depth[target] == len(r.path) - 1
     assert ties >= 10  # the ties the test is about did occur
+
+
+def test_a_walk_that_names_the_commands_writer_goes_on_from_an_earlier_input():
+    # a generated A6 variant (other speeds): planning departs at 1.7 s, the commands only at
+    # 5.0 s, the chassis after them; the paper's window [2, 5] s cut the walk at control,
+    # which cannot be the first module to deviate when its input departed 3.3 s before it
+    t = {"/apollo/perception/obstacles": None, "/apollo/prediction": None,
+         "/apollo/planning": 1.7, "/apollo/control": 5.0, "/apollo/canbus/chassis": 5.1}
+    r = _run(t)
+    assert r.deviating_module == "planning"
+    assert r.path == ("/apollo/control", "control", "/apollo/planning", "planning")
+    assert "/apollo/planning departed earlier (1.7 s)" in r.fallback
+    assert "more than 3 s before" in r.exclusions["control"]
+    # from there the window holds again: prediction's departure 4 s before planning's stays out
+    r = _run({**t, "/apollo/prediction": -2.3 + 0.0})
+    assert r.deviating_module == "planning"
+    # an input within the window is the paper's walk, unchanged
+    r = _run({**t, "/apollo/planning": 2.5})
+    assert r.deviating_module == "planning" and r.fallback is None
+
+
+def test_the_commands_writer_stays_when_no_input_departed():
+    t = {"/apollo/perception/obstacles": None, "/apollo/prediction": None,
+         "/apollo/planning": None, "/apollo/control": 5.0, "/apollo/canbus/chassis": 5.1}
+    r = _run(t)
+    assert r.deviating_module == "control" and r.fallback is None
