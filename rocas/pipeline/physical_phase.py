@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -307,9 +307,11 @@ def _settle(run: Run, trail: list[Mutation]
     step) in whose diff against the accident the same modules depart (have a change point) as
     in the unshrunk reference's: shrinking moves the reference closer to the accident, and may
     move change points, but a step after which a module no longer departs at all (or another
-    one starts to) avoids the accident by another mechanism. Returns it, the steps diffed
-    (``{"mutation", "module", "departed"}``, in the order tried) and its recording (None when
-    the trail has one step and nothing was recorded)."""
+    one starts to before the commands do) avoids the accident by another mechanism. A module
+    that starts to depart only after the control channel has is the commands' consequence (the
+    ego's pose once it drives otherwise), not a mechanism, and does not count. Returns it, the
+    steps diffed (``{"mutation", "module", "departed"}``, in the order tried) and its recording
+    (None when the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.confidence import record_reference
     from rocas.search.executor import done_future, submit
@@ -321,17 +323,22 @@ def _settle(run: Run, trail: list[Mutation]
         return trail[0], [], None
     checked: list[dict[str, Any]] = []
 
-    def departed(k: int) -> list[str]:
+    def departed(k: int) -> tuple[dict[str, float], float | None]:
+        """Each departing module's change point [s], and the control channel's (or None)."""
         path = run.out / f"shrink_{k}.mcap"
         if k not in early:
             simulate(apply_physical(scn, trail[k]), output=path)
         else:
             early.pop(k).result()
         found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s).to_json()
-        modules = sorted(m["name"] for m in found["modules"] if m["change_point_s"] is not None)
+        modules = {m["name"]: m["change_point_s"] for m in found["modules"]
+                   if m["change_point_s"] is not None}
         checked.append({"mutation": dict(trail[k].values), "module": found["deviating_module"],
-                        "departed": modules})
-        return modules
+                        "departed": sorted(modules)})
+        control = [c["change_point_s"] for c in found["channels"]
+                   if c["topic"] == found["control_channel"]]
+        return modules, control[0] if control else None
+
 
     # the unshrunk reference and the most shrunk step are both recorded whatever the diffs
     # say: the first is recorded on a worker (when there is one) while this process records
@@ -341,11 +348,22 @@ def _settle(run: Run, trail: list[Mutation]
                        run.out / "shrink_0.mcap")}
     early[last] = done_future(record_reference, apply_physical(scn, trail[last]),
                               run.out / f"shrink_{last}.mcap")
-    want = departed(0)
+    want, _ = departed(0)
     for k in range(last, 0, -1):
-        if departed(k) == want:
+        if same_mechanism(want, *departed(k)):
             return trail[k], checked, run.out / f"shrink_{k}.mcap"
     return trail[0], checked, run.out / "shrink_0.mcap"
+
+
+def same_mechanism(want: Collection[str], step: Mapping[str, float], t_control: float | None
+                   ) -> bool:
+    """Whether a shrink step whose diff has the modules ``step`` departing (module -> change
+    point [s]; the control channel's at ``t_control``) avoids the accident as the unshrunk
+    reference did, whose modules ``want`` departed: each of them still departs, and any other
+    only after the commands do (see :func:`_settle`)."""
+    extra = set(step) - set(want)
+    return set(want) <= set(step) and (not extra or (
+        t_control is not None and all(step[m] > t_control for m in extra)))
 
 
 def _stats(generation: int, cands: Sequence[Candidate]) -> GenerationStats:

@@ -110,6 +110,26 @@ def test_a1_keeps_the_encounter_and_the_shrink_does_not_change_the_diffs_answer(
     assert not list((tmp_path / "run").glob("shrink_*.mcap"))
 
 
+def test_a_shrink_step_keeps_the_mechanism_when_only_consequences_start_to_depart():
+    """A generated A12 variant (other speeds, seed 313): the cyclist moved -1.0 m, the diff has
+    canbus, control, perception, planning and prediction departing and names planning; shrunk to
+    -0.41 m the same modules depart, prediction first (4.0 s, with the commands), and also the
+    ego's pose at 4.1 s, after the commands: their consequence, so the step keeps the
+    mechanism (and names prediction, the documented module)."""
+    from rocas.pipeline.physical_phase import same_mechanism
+
+    want = ["canbus", "control", "perception", "planning", "prediction"]
+    step = {"canbus": 4.1, "control": 4.0, "localization": 4.1, "perception": 4.1,
+            "planning": 4.0, "prediction": 4.0}
+    assert same_mechanism(want, step, 4.0)
+    assert same_mechanism(want, {m: 1.0 for m in want}, 1.0)
+    # a module that starts to depart with or before the commands is another mechanism
+    assert not same_mechanism(want, {**step, "localization": 4.0}, 4.0)
+    assert not same_mechanism(want, step, None)
+    # a module that no longer departs (A1: prediction, the car forecast static again)
+    assert not same_mechanism(want, {m: t for m, t in step.items() if m != "prediction"}, 4.0)
+
+
 def test_an_emergency_the_accident_had_long_before_it_does_not_count_against_a_reference():
     """A7 laid out with the ego stopping close behind a long truck: its control raises an estop
     at 0.25 s in every world, and the car behind hits it at 7.35 s. A world in which the car
