@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -307,8 +307,8 @@ def _settle(run: Run, trail: list[Mutation]
     step) in whose diff against the accident the same modules depart (have a change point) as
     in the unshrunk reference's: shrinking moves the reference closer to the accident, and may
     move change points, but a step after which a module no longer departs at all (or another
-    one starts to before the commands do) avoids the accident by another mechanism. A module
-    that starts to depart only after the control channel has is the commands' consequence (the
+    one starts to) avoids the accident by another mechanism. A module that departs, in the one
+    diff or the other, only after the control channel has is the commands' consequence (the
     ego's pose once it drives otherwise), not a mechanism, and does not count. Returns it, the
     steps diffed (``{"mutation", "module", "departed"}``, in the order tried) and its recording
     (None when the trail has one step and nothing was recorded)."""
@@ -348,22 +348,26 @@ def _settle(run: Run, trail: list[Mutation]
                        run.out / "shrink_0.mcap")}
     early[last] = done_future(record_reference, apply_physical(scn, trail[last]),
                               run.out / f"shrink_{last}.mcap")
-    want, _ = departed(0)
+    want = departed(0)
     for k in range(last, 0, -1):
-        if same_mechanism(want, *departed(k)):
+        if same_mechanism(*want, *departed(k)):
             return trail[k], checked, run.out / f"shrink_{k}.mcap"
     return trail[0], checked, run.out / "shrink_0.mcap"
 
 
-def same_mechanism(want: Collection[str], step: Mapping[str, float], t_control: float | None
-                   ) -> bool:
-    """Whether a shrink step whose diff has the modules ``step`` departing (module -> change
-    point [s]; the control channel's at ``t_control``) avoids the accident as the unshrunk
-    reference did, whose modules ``want`` departed: each of them still departs, and any other
-    only after the commands do (see :func:`_settle`)."""
-    extra = set(step) - set(want)
-    return set(want) <= set(step) and (not extra or (
-        t_control is not None and all(step[m] > t_control for m in extra)))
+def same_mechanism(want: Mapping[str, float], want_control: float | None,
+                   step: Mapping[str, float], t_control: float | None) -> bool:
+    """Whether a shrink step avoids the accident as the unshrunk reference did (see
+    :func:`_settle`). ``want`` and ``step``: each departing module's change point [s] in the
+    unshrunk reference's diff and in the step's; ``want_control`` and ``t_control``: the
+    control channel's (None: none). Every module departs in both, except one whose departure
+    comes only after the commands' in the diff where it departs: that is their consequence
+    (the ego's pose once it drives otherwise), not a mechanism."""
+    def consequence(m: str, times: Mapping[str, float], tc: float | None) -> bool:
+        return tc is not None and times[m] > tc
+
+    return (all(consequence(m, want, want_control) for m in set(want) - set(step))
+            and all(consequence(m, step, t_control) for m in set(step) - set(want)))
 
 
 def _stats(generation: int, cands: Sequence[Candidate]) -> GenerationStats:

@@ -110,24 +110,33 @@ def test_a1_keeps_the_encounter_and_the_shrink_does_not_change_the_diffs_answer(
     assert not list((tmp_path / "run").glob("shrink_*.mcap"))
 
 
-def test_a_shrink_step_keeps_the_mechanism_when_only_consequences_start_to_depart():
-    """A generated A12 variant (other speeds, seed 313): the cyclist moved -1.0 m, the diff has
-    canbus, control, perception, planning and prediction departing and names planning; shrunk to
-    -0.41 m the same modules depart, prediction first (4.0 s, with the commands), and also the
-    ego's pose at 4.1 s, after the commands: their consequence, so the step keeps the
-    mechanism (and names prediction, the documented module)."""
+def test_a_shrink_step_keeps_the_mechanism_when_only_consequences_depart_or_stop():
+    """Generated variants (other speeds, seed 313). A12: the cyclist moved -1.0 m, the diff names
+    planning; shrunk to -0.41 m the same modules depart, prediction first (4.0 s, with the
+    commands), and also the ego's pose at 4.1 s, after the commands: their consequence, so the
+    step keeps the mechanism (and names prediction, the documented module). A4: the left turner
+    moved -2.0 m, the pose departs at 1.4 s after the commands (0.6 s) and the diff names
+    prediction; shrunk to -1.78 m the pose no longer departs, and the step names planning
+    (documented)."""
     from rocas.pipeline.physical_phase import same_mechanism
 
-    want = ["canbus", "control", "perception", "planning", "prediction"]
+    want = {"canbus": 0.9, "control": 0.8, "perception": 0.9, "planning": 0.8, "prediction": 7.8}
     step = {"canbus": 4.1, "control": 4.0, "localization": 4.1, "perception": 4.1,
             "planning": 4.0, "prediction": 4.0}
-    assert same_mechanism(want, step, 4.0)
-    assert same_mechanism(want, {m: 1.0 for m in want}, 1.0)
+    assert same_mechanism(want, 0.8, step, 4.0)
+    assert same_mechanism(want, 0.8, want, 0.8)
     # a module that starts to depart with or before the commands is another mechanism
-    assert not same_mechanism(want, {**step, "localization": 4.0}, 4.0)
-    assert not same_mechanism(want, step, None)
-    # a module that no longer departs (A1: prediction, the car forecast static again)
-    assert not same_mechanism(want, {m: t for m, t in step.items() if m != "prediction"}, 4.0)
+    assert not same_mechanism(want, 0.8, {**step, "localization": 4.0}, 4.0)
+    assert not same_mechanism(want, 0.8, step, None)
+    # a module that no longer departs (A1: prediction, the car forecast static again) ...
+    a1 = {"control": 3.0, "planning": 3.0, "prediction": 0.4, "canbus": 3.1}
+    assert not same_mechanism(a1, 3.0, {m: t for m, t in a1.items() if m != "prediction"}, 3.0)
+    # ... unless it departed only after the commands (A4: the ego's pose)
+    a4 = {"control": 0.6, "planning": 0.6, "prediction": 0.6, "canbus": 0.7,
+          "perception": 0.7, "localization": 1.4}
+    shrunk = {"control": 6.6, "planning": 6.6, "prediction": 6.6, "canbus": 6.7, "perception": 6.7}
+    assert same_mechanism(a4, 0.6, shrunk, 6.6)
+    assert not same_mechanism(a4, None, shrunk, 6.6)
 
 
 def test_an_emergency_the_accident_had_long_before_it_does_not_count_against_a_reference():
