@@ -317,6 +317,19 @@ SENSING_LIMITS = frozenset({
 })
 
 
+#: Parameters that set how fast the ego drives: desired speeds, speed caps and accelerations.
+#: Raising one avoids an accident by getting the ego through before the other party arrives, a
+#: race won rather than a cause removed (generated A4 and A5 variants: the cruise speed 11 ->
+#: 12.5 m/s, the junction speed 7 -> 7.6 m/s, each the smallest fix found while the documented
+#: yield and overtake margins were about as small), so the cyber search may lower them but
+#: never raise them.
+PACE_LIMITS = frozenset({
+    "planning.cruise_speed_mps", "planning.speed_limit_factor", "planning.junction_speed_mps",
+    "planning.max_accel_mps2", "planning.max_lateral_accel_mps2", "control.max_accel_cmd_mps2",
+    "canbus.throttle_max_accel_mps2",
+})
+
+
 def parameters(module: str | None = None) -> list[Param]:
     """Parameters of one module (or all), in inventory order."""
     return [p for p in _INVENTORY if module is None or p.module == module]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from rocas.ads.params import BRAKING_LIMITS, MODULES, SENSING_LIMITS, parameters
+from rocas.ads.params import BRAKING_LIMITS, MODULES, PACE_LIMITS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.search.space import MutationSpace, Variable
 
@@ -13,16 +13,20 @@ def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "
                 ) -> MutationSpace:
     """The parameters of ``module`` (all modules when None) as a mutation space, without the
     :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
-    and with the :data:`~rocas.ads.params.SENSING_LIMITS` free to grow only (from their current
-    value to their upper bound: a "fix" that senses less hides the accident too).
+    with the :data:`~rocas.ads.params.SENSING_LIMITS` free to grow only (from their current
+    value to their upper bound: a "fix" that senses less hides the accident too), and the
+    :data:`~rocas.ads.params.PACE_LIMITS` free to fall only (a "fix" that drives faster wins a
+    race instead of removing the cause).
 
     Args:
         module: the initial deviating module, or None for ``--scope all``.
         current: the values in force in the accident run (defaults plus overrides).
         stack: the registered stack whose parameters are searched (another stack names its
-            own braking and sensing limits: ``braking_limits``, ``sensing_limits``).
+            own braking, sensing and pace limits: ``braking_limits``, ``sensing_limits``,
+            ``pace_limits``).
     """
-    modules, specs, braking, sensing = MODULES, parameters(module), BRAKING_LIMITS, SENSING_LIMITS
+    modules, specs = MODULES, parameters(module)
+    braking, sensing, pace = BRAKING_LIMITS, SENSING_LIMITS, PACE_LIMITS
     if stack != "ads":
         from rocas.stacks.registry import get_stack
 
@@ -31,6 +35,7 @@ def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "
         specs = tuple(p for p in st.parameters if module is None or p.module == module)
         braking = frozenset(getattr(st, "braking_limits", ()))
         sensing = frozenset(getattr(st, "sensing_limits", ()))
+        pace = frozenset(getattr(st, "pace_limits", ()))
     if module is not None and module not in modules:
         raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(modules)}")
     out = []
@@ -40,6 +45,7 @@ def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "
         value = float(current.get(p.full_name, p.default))
         kind = "int" if p.is_integer else "real"
         low = max(p.low, value) if p.full_name in sensing else p.low
+        high = min(p.high, value) if p.full_name in pace else p.high
         out.append(Variable(p.full_name, p.module, kind, int(value) if kind == "int" else value,
-                            low=low, high=p.high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
+                            low=low, high=high, unit=p.unit if p.unit not in ("bool", "enum") else ""))
     return MutationSpace(tuple(out))
