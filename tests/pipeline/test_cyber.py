@@ -1,11 +1,12 @@
 """The cyber mutation space: one module's parameters at their values in force, never the
 braking limits (capping braking hides an emergency instead of avoiding it), and sensing limits
-only widened (narrowing them hides the cause too)."""
+only widened (narrowing them hides the cause too), pace limits only lowered (driving faster wins
+a race instead of removing the cause)."""
 
 import numpy as np
 import pytest
 
-from rocas.ads.params import BRAKING_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
+from rocas.ads.params import BRAKING_LIMITS, PACE_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.search.space import Mutation
@@ -40,6 +41,26 @@ def test_sensing_limits_may_only_grow():
     assert SENSING_LIMITS <= set(PARAMETERS) and not SENSING_LIMITS & BRAKING_LIMITS
     lowest = Mutation({"perception.camera_range_m": cam.decode(0.0)})
     assert not space.decode(space.encode(lowest)).values  # narrowing is not in the space
+
+
+def test_pace_limits_may_only_fall():
+    space = cyber_space("planning", {"planning.junction_speed_mps": 9.0})
+    junction = space.variable("planning.junction_speed_mps")
+    assert (junction.original, junction.low, junction.high) == (
+        9.0, PARAMETERS["planning.junction_speed_mps"].low, 9.0)
+    cruise = space.variable("planning.cruise_speed_mps")
+    assert cruise.high == cruise.original == PARAMETERS["planning.cruise_speed_mps"].default
+    assert space.variable("planning.yield_distance_m").high == PARAMETERS["planning.yield_distance_m"].high
+    assert PACE_LIMITS <= set(PARAMETERS) and not PACE_LIMITS & (BRAKING_LIMITS | SENSING_LIMITS)
+    faster = Mutation({"planning.junction_speed_mps": 12.0})
+    assert not space.decode(space.encode(faster)).values  # raising is not in the space
+    # the screening tries a pace limit at its lower end only (its upper end is the value in force)
+    from rocas.search.ga import screening_genomes
+
+    screened = [m.values["planning.junction_speed_mps"] for m in
+                (space.decode(g) for g in screening_genomes(space, 0))
+                if "planning.junction_speed_mps" in m.values]
+    assert screened == [junction.low]
 
 
 def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory():
