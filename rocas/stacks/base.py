@@ -109,8 +109,9 @@ class Stack(Protocol):
 #: Optional, for ``rocas analyze`` on a stack's recordings: a stack may define
 #: ``read_motion(recording) -> (list[PoseRow], list[AgentRow])`` reading its own ego and
 #: perception channels from an open :class:`rocas.recording.reader.Recording` (one pass);
-#: and ``braking_limits`` / ``sensing_limits`` (parameter names) that the cyber search must
-#: not lower (a "fix" that brakes or senses less only hides the accident).
+#: ``braking_limits`` / ``sensing_limits`` (parameter names) that the cyber search must not
+#: lower (a "fix" that brakes or senses less only hides the accident); and ``pace_limits`` that
+#: it must not raise (a "fix" that drives faster wins a race).
 
 
 class StackParams(Mapping[str, float]):
