@@ -209,3 +209,13 @@ def test_an_accident_ended_blocked_when_its_ego_stood_without_a_collision():
     assert not ended_blocked(VariantResult(outcome(True), xy, np.zeros((201, 0, 2))), 0.05)
     moving = np.stack([np.arange(201) * 0.5, np.zeros(201)], axis=1)
     assert not ended_blocked(VariantResult(outcome(False), moving, np.zeros((201, 0, 2))), 0.05)
+
+
+def test_another_stack_names_its_own_limits():
+    space = cyber_space(None, {}, stack="lav")
+    names = {v.name for v in space.variables}
+    assert "controller.max_brake_decel_mps2" not in names  # a braking limit
+    camera = space.variable("brake.camera_range_m")  # a sensing limit
+    assert camera.low == camera.original < camera.high
+    top = space.variable("planner.max_speed_kmh")  # a pace limit
+    assert top.low < top.original == top.high

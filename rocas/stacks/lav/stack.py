@@ -50,6 +50,9 @@ class LavStack:
     braking_limits: tuple[str, ...] = ("controller.max_brake_decel_mps2",)
     sensing_limits: tuple[str, ...] = ("pnp.lidar_range_m", "brake.camera_range_m",
                                        "brake.camera_fov_deg", "pnp.forecast_horizon_s")
+    #: ... nor raise these (a "fix" that drives faster wins a race)
+    pace_limits: tuple[str, ...] = ("planner.max_speed_kmh", "planner.max_lateral_accel_mps2",
+                                    "controller.max_throttle_accel_mps2")
 
     @property
     def parameters(self) -> tuple[ParamSpec, ...]:
