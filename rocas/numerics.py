@@ -204,7 +204,7 @@ def tanh(x: np.ndarray | float) -> np.ndarray:
     return _out(out, scalar)
 
 
-_ROWDOT_LOOP_ROWS = 128  # from this many rows on, summing term by term is faster
+_ROWDOT_CHUNK_ROWS = 64  # rows summed in one (N, F, H) product; larger batches go in chunks
 
 
 def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -217,22 +217,29 @@ def rowdot(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     # A feature that is zero in every row adds x * w = +-0.0 to each sum, and that changes no
     # bit: a sum starts at +0.0 and, rounding to nearest, only -0.0 + -0.0 gives -0.0, so a
     # sum is never -0.0 and s + (+-0.0) == s. Such features are skipped (a camera view is
-    # mostly empty columns); with a non-finite weight, 0 * w would be NaN, so not then.
-    if x.shape[0] and w.shape[0]:
+    # mostly empty columns); with a non-finite weight, 0 * w would be NaN, so not then. Only
+    # when the sums run term by term (H > 1, below): numpy's pairwise sum of a single column
+    # groups the terms by position, so dropping one would regroup the others.
+    if x.shape[0] and w.shape[0] and w.shape[1] > 1:
         used = np.logical_or.reduce(x != 0.0, axis=0)
         if not used.all() and np.isfinite(w).all():
             x, w = x[:, used], w[used]
-    if x.shape[0] < _ROWDOT_LOOP_ROWS or w.shape[0] == 0:
-        # a reduction over the middle axis of (N, F, H) runs F-sequentially for each (n, h):
-        # numpy's iteration order, which no CPU feature or BLAS kernel changes
-        return (x[:, :, None] * w[None, :, :]).sum(axis=1)
-    # the same sequence of roundings, (((0 + x0 w0) + x1 w1) + ...), term by term on
-    # (N, H) arrays: a large batch's (N, F, H) temporary would not fit in the cache
-    xt = np.ascontiguousarray(x.T)[:, :, None]  # (F, N, 1)
-    acc = np.multiply(xt[0], w[0])
-    acc += 0.0  # numpy's sum starts from +0.0: a first term of -0.0 becomes +0.0
-    term = np.empty_like(acc)
-    for f in range(1, w.shape[0]):
-        np.multiply(xt[f], w[f], out=term)
-        np.add(acc, term, out=acc)
-    return acc
+    if x.shape[0] <= _ROWDOT_CHUNK_ROWS or w.shape[0] == 0:
+        return _rowdot_rows(x, w)
+    # a large batch in chunks of rows (its (N, F, H) temporary would not fit in the cache),
+    # each summed as a small batch is: a row's sums never depend on the rows beside it
+    out = np.empty((x.shape[0], w.shape[1]))
+    for i in range(0, x.shape[0], _ROWDOT_CHUNK_ROWS):
+        out[i:i + _ROWDOT_CHUNK_ROWS] = _rowdot_rows(x[i:i + _ROWDOT_CHUNK_ROWS], w)
+    return out
+
+
+def _rowdot_rows(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N, F) x (F, H) -> (N, H) through one (N, F, H) product reduced over F.
+
+    numpy reduces the middle axis F-sequentially for each (n, h) when H > 1, and with its
+    pairwise sum over each row's F terms when H == 1 (the axis is then the contiguous one):
+    either way the order depends on F and H only, not on N, and no CPU feature or BLAS
+    kernel changes it.
+    """
+    return (x[:, :, None] * w[None, :, :]).sum(axis=1)

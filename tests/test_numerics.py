@@ -88,16 +88,27 @@ def test_arctan_is_arctan2_over_one_bit_for_bit():
 
 
 def test_rowdot_sums_a_large_batch_in_the_same_order_as_a_small_one():
-    # from _ROWDOT_LOOP_ROWS rows on, rowdot sums term by term; every row must keep its bits
-    x, w = RNG.normal(size=(300, 64)), RNG.normal(size=(64, 16))
-    x[5, :] = 0.0
-    x[6, ::2] = -0.0
-    w[:, 3] = -np.abs(w[:, 3])  # row 5, column 3: a sum of -0.0 terms, which is +0.0
-    big = numerics.rowdot(x, w)
-    assert x.shape[0] >= numerics._ROWDOT_LOOP_ROWS
-    small = np.concatenate([numerics.rowdot(x[i:i + 10], w) for i in range(0, 300, 10)])
-    assert np.array_equal(_bits(big), _bits(small))
-    assert not np.signbit(big[5, 3])
+    # from _ROWDOT_CHUNK_ROWS rows on, rowdot sums in chunks of rows; every row must keep its
+    # bits, also with one output column (the brake classifier's logit), whose sums numpy takes
+    # pairwise: summed term by term from 128 rows on, they differed in 258 of 300 rows
+    for h in (16, 1):
+        x, w = RNG.normal(size=(300, 64)), RNG.normal(size=(64, h))
+        x[5, :] = 0.0
+        x[6, ::2] = -0.0
+        w[:, h // 2] = -np.abs(w[:, h // 2])  # row 5: a sum of -0.0 terms, which is +0.0
+        big = numerics.rowdot(x, w)
+        assert x.shape[0] > numerics._ROWDOT_CHUNK_ROWS
+        small = np.concatenate([numerics.rowdot(x[i:i + 10], w) for i in range(0, 300, 10)])
+        assert np.array_equal(_bits(big), _bits(small))
+        assert np.array_equal(_bits(numerics.rowdot(x[7:8], w)), _bits(big[7:8]))
+        assert not np.signbit(big[5, h // 2])
+        # a feature zero in every row of one batch and not of another: the same bits
+        x[:, 3] = 0.0
+        x[0, 3] = 1e-3
+        # (with one column, skipping such a feature regrouped numpy's pairwise sums: 9 of 10
+        # rows differed)
+        whole = numerics.rowdot(x, w)
+        assert np.array_equal(_bits(numerics.rowdot(x[1:11], w)), _bits(whole[1:11]))
 
 
 def _rowdot_every_term(x: np.ndarray, w: np.ndarray) -> np.ndarray:
