@@ -307,9 +307,8 @@ def _settle(run: Run, trail: list[Mutation]
     step) in whose diff against the accident the same modules depart (have a change point) as
     in the unshrunk reference's: shrinking moves the reference closer to the accident, and may
     move change points, but a step after which a module no longer departs at all (or another
-    one starts to) avoids the accident by another mechanism. A module that departs, in the one
-    diff or the other, only after the control channel has is the commands' consequence (the
-    ego's pose once it drives otherwise), not a mechanism, and does not count. Returns it, the
+    one starts to, or one that led the commands falls behind them) avoids the accident by
+    another mechanism (:func:`same_mechanism`). Returns it, the
     steps diffed (``{"mutation", "module", "departed"}``, in the order tried) and its recording
     (None when the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
@@ -323,8 +322,9 @@ def _settle(run: Run, trail: list[Mutation]
         return trail[0], [], None
     checked: list[dict[str, Any]] = []
 
-    def departed(k: int) -> tuple[dict[str, float], float | None]:
-        """Each departing module's change point [s], and the control channel's (or None)."""
+    def departed(k: int) -> tuple[dict[str, float], float | None, float]:
+        """Each departing module's change point [s], the control channel's (or None), and the
+        diff's bin width [s]."""
         path = run.out / f"shrink_{k}.mcap"
         if k not in early:
             simulate(apply_physical(scn, trail[k]), output=path)
@@ -337,7 +337,7 @@ def _settle(run: Run, trail: list[Mutation]
                         "departed": sorted(modules)})
         control = [c["change_point_s"] for c in found["channels"]
                    if c["topic"] == found["control_channel"]]
-        return modules, control[0] if control else None
+        return modules, control[0] if control else None, found["bin_s"]
 
 
     # the unshrunk reference and the most shrunk step are both recorded whatever the diffs
@@ -348,26 +348,47 @@ def _settle(run: Run, trail: list[Mutation]
                        run.out / "shrink_0.mcap")}
     early[last] = done_future(record_reference, apply_physical(scn, trail[last]),
                               run.out / f"shrink_{last}.mcap")
-    want = departed(0)
+    want, want_control, _ = departed(0)
     for k in range(last, 0, -1):
-        if same_mechanism(*want, *departed(k)):
+        step, t_control, bin_s = departed(k)
+        if same_mechanism(want, want_control, step, t_control, bin_s):
             return trail[k], checked, run.out / f"shrink_{k}.mcap"
     return trail[0], checked, run.out / "shrink_0.mcap"
 
 
+#: bins by which a module's first departure must precede the commands' to count as leading
+#: them: within one bin the pipeline reacts to a changed world at once (perception to control
+#: in a tick or two at 10 Hz), so the order inside it says nothing about the mechanism
+LEAD_BINS = 2
+
+
 def same_mechanism(want: Mapping[str, float], want_control: float | None,
-                   step: Mapping[str, float], t_control: float | None) -> bool:
+                   step: Mapping[str, float], t_control: float | None,
+                   bin_s: float = 0.1) -> bool:
     """Whether a shrink step avoids the accident as the unshrunk reference did (see
     :func:`_settle`). ``want`` and ``step``: each departing module's change point [s] in the
     unshrunk reference's diff and in the step's; ``want_control`` and ``t_control``: the
-    control channel's (None: none). Every module departs in both, except one whose departure
-    comes only after the commands' in the diff where it departs: that is their consequence
-    (the ego's pose once it drives otherwise), not a mechanism."""
+    control channel's (None: none); ``bin_s``: the diffs' bin width [s].
+
+    Every module departs in both, except one whose departure comes only after the commands'
+    in the diff where it departs: that is their consequence (the ego's pose once it drives
+    otherwise), not a mechanism. And a module that departed LEAD_BINS bins or more before the
+    commands in the unshrunk reference's diff changed the stack's state while the commands
+    stayed alike, which is how that reference avoided the accident: in the step it must still
+    depart no later than the commands (the campaign's and generated A1 variants: prediction
+    forecasts the lifted creeping car from 0.4-0.5 s, 2.5 s before the commands depart; shrunk
+    to just under the still-obstacle speed, it departs only after them, at 3.2-3.8 s, and the
+    reference avoids the accident by timing)."""
     def consequence(m: str, times: Mapping[str, float], tc: float | None) -> bool:
         return tc is not None and times[m] > tc
 
+    def leads(m: str) -> bool:
+        return want_control is not None and want_control - want[m] >= (LEAD_BINS - 0.5) * bin_s
+
     return (all(consequence(m, want, want_control) for m in set(want) - set(step))
-            and all(consequence(m, step, t_control) for m in set(step) - set(want)))
+            and all(consequence(m, step, t_control) for m in set(step) - set(want))
+            and all(m in step and not consequence(m, step, t_control)
+                    for m in want if leads(m)))
 
 
 def _stats(generation: int, cands: Sequence[Candidate]) -> GenerationStats:

@@ -139,6 +139,26 @@ def test_a_shrink_step_keeps_the_mechanism_when_only_consequences_depart_or_stop
     assert not same_mechanism(a4, None, shrunk, 6.6)
 
 
+def test_a_shrink_step_keeps_the_modules_that_led_the_commands_ahead_of_them():
+    """Catalog A1 and a generated A1 variant (other speeds, seed 313): lifted by +1.03 m/s the
+    creeping car is forecast as moving, and prediction and planning depart at 0.5 s, 2.5 s
+    before the commands. Shrunk to +0.26 m/s prediction still departs first (0.7 s): the same
+    mechanism. Shrunk to +0.15 m/s (0.45 m/s, under the still-obstacle speed) it departs only
+    after the commands (3.2 s): the accident is avoided by timing, another mechanism. A4's
+    prediction departs one bin before the commands: that is no lead."""
+    from rocas.pipeline.physical_phase import same_mechanism
+
+    lifted = {"canbus": 3.1, "control": 3.0, "localization": 3.2, "perception": 3.2,
+              "planning": 0.5, "prediction": 0.5}
+    catalog_step = {**lifted, "planning": 3.0, "prediction": 0.7}
+    timing_step = {**lifted, "planning": 3.0, "prediction": 3.2}
+    assert same_mechanism(lifted, 3.0, catalog_step, 3.0, 0.1)
+    assert not same_mechanism(lifted, 3.0, timing_step, 3.0, 0.1)
+    a4 = {"control": 0.6, "planning": 0.6, "prediction": 0.5, "canbus": 0.7}
+    assert same_mechanism(a4, 0.6, {**a4, "prediction": 6.6}, 0.6, 0.1)
+    assert not same_mechanism({**a4, "prediction": 0.4}, 0.6, {**a4, "prediction": 6.6}, 0.6, 0.1)
+
+
 def test_an_emergency_the_accident_had_long_before_it_does_not_count_against_a_reference():
     """A7 laid out with the ego stopping close behind a long truck: its control raises an estop
     at 0.25 s in every world, and the car behind hits it at 7.35 s. A world in which the car
