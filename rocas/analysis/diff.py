@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -94,6 +94,8 @@ class DiffResult:
         warnings: damage and skips found while reading, one line each.
         entries: Algorithm 1's result with the departures where content entered both runs
             passed over (:func:`entries_to_pass`), when there were any; None otherwise.
+        control_onset_s: the time of the control channel's first differing bin [s] (None:
+            its messages are the same in both recordings).
     """
 
     accident: str
@@ -106,6 +108,7 @@ class DiffResult:
     messages_read: tuple[int, int]
     warnings: tuple[str, ...] = field(default=())
     entries: PinpointResult | None = None
+    control_onset_s: float | None = None
 
     @property
     def deviating_module(self) -> str | None:
@@ -124,6 +127,24 @@ class DiffResult:
         return t is not None and any(
             m in c.writers and c.entered_s is not None and abs(c.entered_s - t) < 1e-9
             for c in self.channels)
+
+    def walk_without(self, modules: Collection[str], past_entries: bool = False) -> PinpointResult:
+        """Algorithm 1 again, with every channel that ``modules`` write (other than the
+        control channel) counted as not departed: the walk another method's evidence asks for
+        when it rules those modules out as the accident's cause (module substitution: their
+        ground truth leaves the accident in place). ``past_entries``: each channel's change
+        point after content entered both runs, as :attr:`entries` walks. The channels' change
+        points are the diff's; nothing is read again."""
+        quiet = {c for m in modules for c in self.cmg.channels_written_by(m)} - {self.control_channel}
+
+        def t(c: ChannelDiff) -> float | None:
+            if past_entries and c.after_entry is not None:
+                return c.after_entry.first_s
+            return c.change_point_s
+
+        t_star = {c.topic: (None if c.topic in quiet else t(c)) for c in self.channels}
+        return find_initial_module(self.cmg, t_star, self.control_channel, self.delta_s,
+                                   control_onset_s=self.control_onset_s, bin_s=self.bin_s)
 
     @property
     def complete(self) -> bool:
@@ -399,6 +420,7 @@ def diff(
         messages_read=res.messages_read,
         warnings=warnings,
         entries=pin_entries,
+        control_onset_s=onset,
     )
 
 

@@ -305,6 +305,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     from rocas.pipeline.report import (
         accident_text,
         change,
+        cleared_passed_text,
         confidence_text,
         entries_passed_text,
         regression_text,
@@ -337,6 +338,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
             t.add_row("", f"({report['walk_fallback']})")
         if report.get("entries_passed"):
             t.add_row("", f"({entries_passed_text(report)})")
+        if report.get("cleared_passed"):
+            t.add_row("", f"({cleared_passed_text(report)})")
     if report.get("confidence"):
         t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:

@@ -29,8 +29,9 @@ import json
 import shutil
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rocas._fs import atomic_path, write_text_atomic
 from rocas.pipeline.physical import apply_physical
@@ -38,6 +39,9 @@ from rocas.pipeline.rundir import Run
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import submit
 from rocas.search.space import Mutation
+
+if TYPE_CHECKING:
+    from rocas.analysis.diff import DiffResult
 
 #: the report's words for each substitution stance (rocas.pipeline.substitution)
 _STANCE_WORDS = {
@@ -97,11 +101,9 @@ def level(agree: dict[str, Any], stance: str | None, fallback: bool = False) -> 
 
 def phase_confidence(run: Run) -> dict[str, Any]:
     """Diff the accident against alternate references and ask module substitution. Returns
-    the phase's result. When the references' majority names another module than the chosen
-    reference, and module substitution supports the majority's module but not the chosen
-    one's, the majority's best-ranked reference becomes the reference (reference.mcap,
-    diff.json and the diff phase's summary are rewritten for it): two independent methods
-    outweigh one reference. Otherwise the chosen reference's answer stands."""
+    the phase's result. When :func:`adopted_answer` picks another reference's answer than the
+    chosen one's, that reference becomes the reference (reference.mcap, diff.json and the diff
+    phase's summary are rewritten for it); otherwise the chosen reference's answer stands."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.substitution import second_opinion
 
@@ -124,29 +126,28 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
         opinion = second_opinion(scn)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
-                **_answer(chosen_diff, opinion)}]
-    if answers[0].get("entries_passed"):  # the walk past the entries: the diff's answer now
+                **_answer(chosen_diff, opinion, lambda: diff(
+                    run.out / "accident.mcap", run.out / "reference.mcap", delta_s=run.cfg.delta_s))}]
+    passed = {k: answers[0][k] for k in _PASSED if answers[0].get(k)}
+    if passed:  # the walk past the entries or a cleared module: the diff's answer now
         run.state["done"]["diff"] = {
             **chosen_diff, "deviating_module": answers[0]["module"], "path": answers[0]["path"],
-            "fallback": answers[0]["fallback"], "entries_passed": answers[0]["entries_passed"]}
+            "fallback": answers[0]["fallback"], **passed}
     diffs: list[dict[str, Any] | None] = [None]
     for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
         job.result()
-        found = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
-                     delta_s=run.cfg.delta_s).to_json()
+        result = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
+                      delta_s=run.cfg.delta_s)
+        found = result.to_json()
         diffs.append(found)
         answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
-                        **_answer(found, opinion)})
+                        **_answer(found, opinion, lambda r=result: r)})
     simulations = len(alternates)
     result: dict[str, Any] = {"answers": answers}
     if opinion is not None:
         simulations += len(opinion.runs) + 1
-    majority = agreement([a["module"] for a in answers])["majority"]
-    adopted = 0
-    chosen_module = answers[0]["module"]
-    if (opinion is not None and majority != chosen_module and opinion.stance(majority) in _SUPPORTS
-            and opinion.stance(chosen_module) == "disagrees"):
-        adopted = next(i for i, a in enumerate(answers) if a["module"] == majority)
+    adopted = adopted_answer(answers, opinion)
+    if adopted:
         result["triggering_entity"] = triggering_entity(scn, Mutation(dict(answers[adopted]["mutation"])))
         _adopt(run, answers[adopted], diffs[adopted])
     agree = agreement([a["module"] for a in answers], adopted)
@@ -161,12 +162,43 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     return result
 
 
-def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
+#: the answer's keys that say which departures its walk passed over
+_PASSED = ("entries_passed", "cleared_passed")
+
+
+def adopted_answer(answers: list[dict[str, Any]], opinion: Any) -> int:
+    """The index in ``answers`` (the chosen reference's first, then the alternates' in rank
+    order) of the answer the analysis reports; ``opinion``: module substitution's, or None.
+
+    - When the references' majority names another module than the chosen reference, and
+      module substitution supports the majority's module but not the chosen one's, the
+      majority's best-ranked reference: two independent methods outweigh one reference.
+    - When the chosen reference's diff names no module (its commands differ from their first
+      messages, or nothing upstream explains them), it abstains: the best-ranked reference
+      that names a module substitution does not disagree with (any module, without
+      substitution) answers instead (a light switched off lets an ego that waited at red
+      drive from the first tick, and the diff has no departure to walk back from).
+    - Otherwise the chosen reference's (0).
+    """
+    majority = agreement([a["module"] for a in answers])["majority"]
+    chosen = answers[0]["module"]
+    if (opinion is not None and majority != chosen and opinion.stance(majority) in _SUPPORTS
+            and opinion.stance(chosen) == "disagrees"):
+        return next(i for i, a in enumerate(answers) if a["module"] == majority)
+    if chosen is None:
+        return next((i for i, a in enumerate(answers) if a["module"] is not None and (
+            opinion is None or opinion.stance(a["module"]) in _SUPPORTS)), 0)
+    return 0
+
+
+def _answer(found: dict[str, Any], opinion: Any, result: Callable[[], DiffResult] | None = None
+            ) -> dict[str, Any]:
     """A reference's answer from its diff (``found``: the diff's JSON or the diff phase's
-    summary): Algorithm 1's walk, or the walk with the departures where content entered both
-    runs passed over (``found["entries"]``, :func:`rocas.analysis.entries.entries_to_pass`)
-    when the two name different modules and module substitution (``opinion``) supports the
-    second and not the first.
+    summary; ``result``: gives the diff itself, called only when a walk must be taken again):
+    Algorithm 1's walk, or the walk with the departures where content entered both runs passed
+    over (``found["entries"]``, :func:`rocas.analysis.entries.entries_to_pass`) when the two
+    name different modules and module substitution (``opinion``) supports the second and not
+    the first; then past a module substitution cleared (:func:`_past_cleared`).
 
     Content that enters both runs at once and differs from its first message (a bus in one
     run, a truck in the other, coming into view at the same tick) makes its channel depart
@@ -183,16 +215,49 @@ def _answer(found: dict[str, Any], opinion: Any) -> dict[str, Any]:
     """
     answer = {"module": found["deviating_module"], "path": found["path"],
               "fallback": found.get("fallback")}
-    if found.get("entries_passed"):  # a summary this phase already resolved
-        return {**answer, "entries_passed": found["entries_passed"]}
+    if any(found.get(k) for k in _PASSED):  # a summary this phase already resolved
+        return {**answer, **{k: found[k] for k in _PASSED if found.get(k)}}
     entries = found.get("entries")
-    if (opinion is None or not entries or entries["deviating_module"] == answer["module"]
+    if not (opinion is None or not entries or entries["deviating_module"] == answer["module"]
             or not entries.get("named_at_entry")
             or opinion.stance(answer["module"]) != "disagrees"
             or opinion.stance(entries["deviating_module"]) not in _SUPPORTS):
+        answer = {"module": entries["deviating_module"], "path": entries["path"],
+                  "fallback": entries["fallback"], "entries_passed": entries["channels"]}
+    return _past_cleared(answer, opinion, result)
+
+
+def _past_cleared(answer: dict[str, Any], opinion: Any, result: Callable[[], DiffResult] | None
+                  ) -> dict[str, Any]:
+    """``answer`` with the walk taken again past its module when module substitution
+    (``opinion``) cleared that module while another module's ground truth alone avoids the
+    accident.
+
+    A module whose ground truth leaves the accident in place did not cause it: no
+    configuration of it could do better than ground truth. Its departure before the commands'
+    is then a difference the rest of the stack did not act on (a drifting truck placed 0.8 m
+    aside changes the brake classifier's probabilities 1.8 s before planning departs, and the
+    walk, taking the earliest input, ends at perception). The walk is taken again with that
+    module's channels counted as not departed (:meth:`DiffResult.walk_without`), repeatedly
+    while it names a cleared module. The rule needs substitution to be informative: when no
+    module's ground truth alone avoids the accident (one the ego could not avoid, A7's car
+    from behind, or one only both substitutes together avoid) clearing says nothing, and the
+    answer stands; it stands too when the walk past names no module."""
+    if (opinion is None or result is None or not opinion.accident or opinion.module is None
+            or answer["module"] not in opinion.cleared):
         return answer
-    return {"module": entries["deviating_module"], "path": entries["path"],
-            "fallback": entries["fallback"], "entries_passed": entries["channels"]}
+    found = result()
+    passed: list[str] = []
+    pin = None
+    module = answer["module"]
+    while module in opinion.cleared and module not in passed:
+        passed.append(module)
+        pin = found.walk_without(passed, past_entries=bool(answer.get("entries_passed")))
+        module = pin.deviating_module
+    if pin is None or module is None:
+        return answer
+    return {**answer, "module": module, "path": list(pin.path), "fallback": pin.fallback,
+            "cleared_passed": passed}
 
 
 def record_reference(scenario: Scenario, reference: Path) -> None:
@@ -226,8 +291,7 @@ def _adopt(run: Run, answer: dict[str, Any], data: dict[str, Any]) -> None:
                                  "fallback": answer["fallback"],
                                  "entries": data["entries"],
                                  "adopted_from": answer["reference"]}
-    if answer.get("entries_passed"):
-        run.state["done"]["diff"]["entries_passed"] = answer["entries_passed"]
+    run.state["done"]["diff"] |= {k: answer[k] for k in _PASSED if answer.get(k)}
 
 
 def note(result: dict[str, Any]) -> str:
@@ -239,10 +303,14 @@ def note(result: dict[str, Any]) -> str:
         r = agree["runner_up"]
         text += f" ({r['runs']} name{'s' if r['runs'] == 1 else ''} {r['module'] or 'no module'})"
     first = result["answers"][0]["module"] or "no module"
-    if result.get("adopted"):
+    adopted_ref = result["answers"][result.get("adopted", 0)]["reference"]
+    if result.get("adopted") and result["answers"][0]["module"] is None:
+        text += (f"; the chosen reference's diff named no module, so the best-ranked reference "
+                 f"that names one ({adopted_ref}) is used")
+    elif result.get("adopted"):
         text += (f"; the chosen reference named {first}, but the majority and module substitution "
                  f"name {module or 'no module'}, so the majority's best-ranked reference "
-                 f"({result['answers'][result['adopted']]['reference']}) is used")
+                 f"({adopted_ref}) is used")
     elif agree.get("majority", module) != module:
         text += (f"; the majority names {agree['majority'] or 'no module'}, which module substitution "
                  f"does not support, so the chosen reference's answer stands")
@@ -251,6 +319,10 @@ def note(result: dict[str, Any]) -> str:
         text += f"; {_STANCE_WORDS[second['stance']]}"
         if second["stance"] == "disagrees" and second.get("module"):
             text += f" ({second['module']})"
+    cleared = result["answers"][result.get("adopted", 0)].get("cleared_passed")
+    if cleared:
+        text += (f"; the walk went on past {' and '.join(cleared)}, whose ground truth leaves the "
+                 "accident in place")
     if result["answers"][result.get("adopted", 0)].get("fallback"):
         text += ("; found without a change point on the control channel that times its "
                  "departure (Algorithm 1's fallback), so at most contested")

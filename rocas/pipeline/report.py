@@ -68,6 +68,8 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         # the departures where content entered both runs, passed over (module substitution
         # disagreed with the module Algorithm 1 named at them): topic -> time [s]
         "entries_passed": diff.get("entries_passed"),
+        # modules whose departures the walk went on past: module substitution cleared them
+        "cleared_passed": diff.get("cleared_passed"),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -114,6 +116,14 @@ def entries_passed_text(report: dict[str, Any]) -> str:
 
     return (entries_text(report["entries_passed"], report["deviating_module"])
             + "; module substitution disagrees with the module named at those departures")
+
+
+def cleared_passed_text(report: dict[str, Any]) -> str:
+    """Why the walk went on past modules module substitution cleared (one clause)."""
+    cleared = " and ".join(report["cleared_passed"])
+    return (f"the walk went on past {cleared}: with its ground truth the accident still "
+            f"happens, while another module's ground truth avoids it; past it, the walk names "
+            f"{report['deviating_module'] or 'no module'}")
 
 
 def _nothing_recorded(replay: dict[str, Any], accident: Any) -> bool:
@@ -262,6 +272,8 @@ def markdown(report: dict[str, Any]) -> str:
             lines.append(f"  - {report['walk_fallback']}.")
         if report.get("entries_passed"):
             lines.append(f"  - {entries_passed_text(report)}.")
+        if report.get("cleared_passed"):
+            lines.append(f"  - {cleared_passed_text(report)}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:

@@ -124,3 +124,19 @@ def test_a_crossing_vehicle_that_enters_view_as_a_bus_or_a_truck(tmp_path):
     opinion = second_opinion(recon.scenario)
     assert opinion.stance("perception") == "disagrees"
     assert opinion.stance("planning") == "consistent"
+
+
+def test_the_walk_without_modules_counts_their_channels_as_not_departed(tmp_path):
+    r = _diff(tmp_path, seen_at=2.0, predicted_at=2.0, differs_at=3.0)
+    assert r.deviating_module == "perception"
+    past = r.walk_without(["perception"])
+    assert past.deviating_module == "prediction"
+    assert past.t_star[("channel", "/obstacles")] is None
+    both = r.walk_without(["perception", "prediction"])
+    assert both.deviating_module == "planning"
+    assert both.path == ("/control", "control", "/planning", "planning")
+    # the control channel's own writer is never silenced: its change point starts the walk
+    assert r.walk_without(["control"]).deviating_module == "perception"
+    # nothing read again: the diff's own change points, and past the entries on request
+    assert r.walk_without([]).deviating_module == r.deviating_module
+    assert r.walk_without([], past_entries=True).deviating_module == r.entries.deviating_module

@@ -78,10 +78,12 @@ class _Opinion:
     """A stand-in for SubstitutionOpinion: a stance per module, the module whose ground truth
     avoids the accident (if any) and whether all ground truth together does."""
 
-    def __init__(self, module=None, jointly_avoided=False, **stances):
+    def __init__(self, module=None, jointly_avoided=False, cleared=(), **stances):
         self.stances = stances
         self.module = module
         self.jointly_avoided = jointly_avoided
+        self.cleared = tuple(cleared)
+        self.accident = True
 
     def stance(self, module):
         return self.stances.get(module, "disagrees")
@@ -115,3 +117,76 @@ def test_the_walk_past_entries_is_taken_only_when_substitution_prefers_it():
     # Algorithm 1 named its module at another departure than an entry (an A2 variant)
     other = {**found, "entries": {**found["entries"], "named_at_entry": False}}
     assert _answer(other, _Opinion(planning="consistent"))["module"] == "perception"
+
+
+class _Walks:
+    """A stand-in for DiffResult: the module Algorithm 1 names with the given modules'
+    channels counted as not departed."""
+
+    def __init__(self, **past):
+        self.past = past
+        self.calls = []
+
+    def walk_without(self, modules, past_entries=False):
+        from types import SimpleNamespace
+
+        self.calls.append((tuple(modules), past_entries))
+        module = self.past.get("+".join(modules))
+        path = ("/control", "control", "/planning", "planning") if module == "planning" else ()
+        return SimpleNamespace(deviating_module=module, path=path, fallback=None)
+
+
+def test_the_walk_goes_on_past_a_module_substitution_cleared():
+    from rocas.pipeline.confidence import _answer
+
+    found = {"deviating_module": "perception",
+             "path": ["/control", "control", "/planning", "planning", "/perception/brake_signal",
+                      "perception"], "fallback": None, "entries": None}
+    # a drifting truck set aside changes the brake classifier's probabilities long before
+    # planning departs; ground-truth perception leaves the accident, ground-truth prediction
+    # avoids it (an A6 variant)
+    cleared = _Opinion(module="prediction", cleared=["perception"], prediction="agrees")
+    walks = _Walks(perception="planning")
+    taken = _answer(found, cleared, lambda: walks)
+    assert taken["module"] == "planning" and taken["cleared_passed"] == ["perception"]
+    assert taken["path"] == ["/control", "control", "/planning", "planning"]
+    # past two cleared modules in turn
+    walks = _Walks(perception="prediction", **{"perception+prediction": "planning"})
+    both = _Opinion(module="perception", cleared=["perception", "prediction"])
+    both.module = "perception"  # informative: some module's ground truth avoids it
+    assert _answer(found, both, lambda: walks)["cleared_passed"] == ["perception", "prediction"]
+    # clearing says nothing when no module's ground truth alone avoids the accident (a car
+    # from behind: A7), and a module substitution did not clear stands; the diff is not read
+    unread = _Walks(perception="planning")
+    for opinion in (_Opinion(cleared=["perception", "prediction"]),
+                    _Opinion(jointly_avoided=True, cleared=["perception", "prediction"]),
+                    _Opinion(module="perception", perception="agrees", cleared=["prediction"]),
+                    None):
+        kept = _answer(found, opinion, lambda: unread)
+        assert kept["module"] == "perception" and "cleared_passed" not in kept
+    assert unread.calls == []
+    # a walk past that names no module leaves Algorithm 1's answer
+    assert _answer(found, cleared, lambda: _Walks())["module"] == "perception"
+    # a summary this phase resolved stays resolved (a resumed run)
+    summary = {**found, **{k: taken[k] for k in ("path", "cleared_passed")},
+               "deviating_module": "planning"}
+    assert _answer(summary, cleared, lambda: unread)["cleared_passed"] == ["perception"]
+
+
+def test_an_abstaining_chosen_reference_gives_way_to_one_that_names_a_module():
+    from rocas.pipeline.confidence import adopted_answer
+
+    def answers(*modules):
+        return [{"reference": f"reference_{i}.mcap", "module": m} for i, m in enumerate(modules)]
+
+    # a light switched off: the ego drives from the first tick, the diff names no module
+    sub = _Opinion(module="prediction", prediction="agrees")
+    assert adopted_answer(answers(None, None, "prediction"), sub) == 2
+    assert adopted_answer(answers(None, "planning", "prediction"), sub) == 2  # disagrees
+    assert adopted_answer(answers(None, "planning", "prediction"), None) == 1
+    assert adopted_answer(answers(None, None), sub) == 0
+    # an answer stands when it names a module (majority rule aside)
+    assert adopted_answer(answers("planning", None, None), sub) == 0
+    # the majority rule as before
+    two = _Opinion(perception="agrees", planning="disagrees")
+    assert adopted_answer(answers("planning", "perception", "perception"), two) == 1
