@@ -23,7 +23,7 @@ from rocas.analysis.cmg import (
 )
 from rocas.analysis.entries import change_points_from, entries_to_pass
 from rocas.analysis.mdr import Tolerance
-from rocas.analysis.pinpoint import PinpointResult, find_initial_module
+from rocas.analysis.pinpoint import PinpointResult, find_initial_module, past_the_window
 from rocas.analysis.series import ChannelSeries, compute_series
 from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
@@ -145,6 +145,16 @@ class DiffResult:
         t_star = {c.topic: (None if c.topic in quiet else t(c)) for c in self.channels}
         return find_initial_module(self.cmg, t_star, self.control_channel, self.delta_s,
                                    control_onset_s=self.control_onset_s, bin_s=self.bin_s)
+
+    def walk_past_window(self, written_by: Collection[str]) -> PinpointResult:
+        """Algorithm 1's walk continued from an input of the module it named that a module of
+        ``written_by`` writes and that departed before the window
+        (:func:`~rocas.analysis.pinpoint.past_the_window`); Algorithm 1's own result when
+        there is none."""
+        if self.pinpoint.deviating_module is None:
+            return self.pinpoint
+        t_star = {c.topic: c.change_point_s for c in self.channels}
+        return past_the_window(self.cmg, t_star, self.pinpoint, self.delta_s, written_by)
 
     @property
     def complete(self) -> bool:

@@ -32,7 +32,7 @@ measured on, already hold it), and the paper's pruning would cut the walk at the
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 
 from rocas.analysis.cmg import CHANNEL, MODULE, ChannelModuleGraph, Node
@@ -243,26 +243,33 @@ def find_initial_module(
         fallback=fallback,
     )
     if past_window and fallback is None and deviating in cmg.writers_of(control_channel):
-        return _past_the_window(cmg, channel_t_star, result, delta_s)
+        return past_the_window(cmg, channel_t_star, result, delta_s)
     return result
 
 
-def _past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float | None],
-                     found: PinpointResult, delta_s: float) -> PinpointResult:
-    """The walk that named the control channel's own writer, continued past the window.
+def past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float | None],
+                    found: PinpointResult, delta_s: float,
+                    written_by: Collection[str] | None = None) -> PinpointResult:
+    """The walk that named a module, continued past the window.
 
-    Naming the writer of the commands says only that none of its inputs departed within
-    ``delta_s`` before them. When one departed earlier, the writer was not the first module to
-    deviate: the walk goes on from the latest such input (then by name), with the window again,
-    and :attr:`PinpointResult.fallback` says so. Deeper in the graph the window keeps its role
-    (an early harmless departure upstream of a module that departed within it is passed over).
+    Naming a module says only that none of its inputs departed within ``delta_s`` before its
+    own change point. When one departed earlier, the module was not the first to deviate: the
+    walk goes on from the latest such input (then by name; only inputs that a module of
+    ``written_by`` writes, when given), with the window again, and
+    :attr:`PinpointResult.fallback` says so. Algorithm 1 takes this step by itself only for
+    the control channel's own writer (the commands' writer deviates only through its inputs);
+    deeper in the graph the window keeps its role (an early harmless departure upstream of a
+    module that departed within it is passed over) unless other evidence asks for the step
+    (module substitution: rocas.pipeline.confidence). Returns ``found`` when there is no such
+    input or the walk from it names no other module.
     """
     writer = found.deviating_module
     assert writer is not None
     t_writer = found.t_star[(MODULE, writer)]
     assert t_writer is not None
     early = [(t, c) for c in cmg.channels_read_by(writer)
-             if (t := channel_t_star.get(c)) is not None and t < t_writer - delta_s]
+             if (t := channel_t_star.get(c)) is not None and t < t_writer - delta_s
+             and (written_by is None or set(cmg.writers_of(c)) & set(written_by))]
     if not early:
         return found
     t_in, channel = min(early, key=lambda tc: (-tc[0], tc[1]))
@@ -274,8 +281,9 @@ def _past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float
                           f"{delta_s:g} s before its own change point ({_fmt(t_writer)})")
     exclusions.pop(rest.deviating_module, None)
     note = (f"no input of {writer} departed within {delta_s:g} s before "
-            f"{found.control_channel} ({_fmt(t_writer)}), but {channel} departed earlier "
-            f"({_fmt(t_in)}), so the walk goes on from it")
+            + (f"{found.control_channel}" if writer in cmg.writers_of(found.control_channel)
+               else f"{writer} departed") + f" ({_fmt(t_writer)}), but {channel} departed "
+            f"earlier ({_fmt(t_in)}), so the walk goes on from it")
     return PinpointResult(
         deviating_module=rest.deviating_module,
         control_channel=found.control_channel,

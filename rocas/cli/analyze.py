@@ -340,6 +340,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
             t.add_row("", f"({entries_passed_text(report)})")
         if report.get("cleared_passed"):
             t.add_row("", f"({cleared_passed_text(report)})")
+        if report.get("window_passed"):
+            t.add_row("", f"({report['window_passed']})")
     if report.get("confidence"):
         t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:

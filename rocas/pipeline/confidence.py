@@ -163,7 +163,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
 
 
 #: the answer's keys that say which departures its walk passed over
-_PASSED = ("entries_passed", "cleared_passed")
+_PASSED = ("entries_passed", "cleared_passed", "window_passed")
 
 
 def adopted_answer(answers: list[dict[str, Any]], opinion: Any) -> int:
@@ -198,7 +198,8 @@ def _answer(found: dict[str, Any], opinion: Any, result: Callable[[], DiffResult
     Algorithm 1's walk, or the walk with the departures where content entered both runs passed
     over (``found["entries"]``, :func:`rocas.analysis.entries.entries_to_pass`) when the two
     name different modules and module substitution (``opinion``) supports the second and not
-    the first; then past a module substitution cleared (:func:`_past_cleared`).
+    the first; then past a module substitution cleared (:func:`_past_cleared`) or past the
+    window toward the module substitution names (:func:`_past_window`).
 
     Content that enters both runs at once and differs from its first message (a bus in one
     run, a truck in the other, coming into view at the same tick) makes its channel depart
@@ -224,7 +225,34 @@ def _answer(found: dict[str, Any], opinion: Any, result: Callable[[], DiffResult
             or opinion.stance(entries["deviating_module"]) not in _SUPPORTS):
         answer = {"module": entries["deviating_module"], "path": entries["path"],
                   "fallback": entries["fallback"], "entries_passed": entries["channels"]}
-    return _past_cleared(answer, opinion, result)
+    return _past_cleared(answer, opinion, result) if "entries_passed" in answer else \
+        _past_window(_past_cleared(answer, opinion, result), opinion, result)
+
+
+def _past_window(answer: dict[str, Any], opinion: Any, result: Callable[[], DiffResult] | None
+                 ) -> dict[str, Any]:
+    """``answer`` with Algorithm 1's walk continued past its window toward the module that
+    module substitution (``opinion``) names, when that module writes an input of the module
+    the walk named that departed before the window, and the walk from that input names it.
+
+    The window (``--delta``) passes over departures upstream that came too long before a
+    module's own to have caused it. How long a cause takes to reach the commands depends on
+    the accident, though: the red truck of A9 met at a lower speed is in view 3.2 s before the
+    brake classifier's output crosses its threshold, the brake signal departs when the truck
+    comes into view, and the walk ends at planning, one bin outside the window. When the
+    module whose ground truth alone avoids the accident is the one whose early departure the
+    window cut off, the two methods agree on it, and it is the answer; the report says the
+    walk went on past the window (``window_passed``). Only Algorithm 1's own answer is
+    continued so (not one already taken past entries or cleared modules, nor its fallback's)."""
+    target = None if opinion is None or not opinion.accident else opinion.module
+    if (result is None or target is None or answer["module"] in (None, target)
+            or answer.get("fallback") or answer.get("cleared_passed")):
+        return answer
+    pin = result().walk_past_window([target])
+    if pin.deviating_module != target:
+        return answer
+    return {**answer, "module": target, "path": list(pin.path),
+            "window_passed": f"{pin.fallback}; module substitution names {target}"}
 
 
 def _past_cleared(answer: dict[str, Any], opinion: Any, result: Callable[[], DiffResult] | None
@@ -323,6 +351,8 @@ def note(result: dict[str, Any]) -> str:
     if cleared:
         text += (f"; the walk went on past {' and '.join(cleared)}, whose ground truth leaves the "
                  "accident in place")
+    if result["answers"][result.get("adopted", 0)].get("window_passed"):
+        text += "; the walk went on past its window to the module substitution names"
     if result["answers"][result.get("adopted", 0)].get("fallback"):
         text += ("; found without a change point on the control channel that times its "
                  "departure (Algorithm 1's fallback), so at most contested")

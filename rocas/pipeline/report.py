@@ -70,6 +70,8 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "entries_passed": diff.get("entries_passed"),
         # modules whose departures the walk went on past: module substitution cleared them
         "cleared_passed": diff.get("cleared_passed"),
+        # why the walk went on past Algorithm 1's window toward the module substitution names
+        "window_passed": diff.get("window_passed"),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -274,6 +276,8 @@ def markdown(report: dict[str, Any]) -> str:
             lines.append(f"  - {entries_passed_text(report)}.")
         if report.get("cleared_passed"):
             lines.append(f"  - {cleared_passed_text(report)}.")
+        if report.get("window_passed"):
+            lines.append(f"  - {report['window_passed']}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:

@@ -242,3 +242,27 @@ def test_the_commands_writer_stays_when_no_input_departed():
          "/apollo/planning": None, "/apollo/control": 5.0, "/apollo/canbus/chassis": 5.1}
     r = _run(t)
     assert r.deviating_module == "control" and r.fallback is None
+
+
+def test_a_walk_goes_on_past_a_named_modules_window_only_when_asked_and_from_whose_inputs():
+    from rocas.analysis.pinpoint import past_the_window
+
+    cmg = build_cmg([], APOLLO)
+    # perception's obstacles depart 3.5 s before planning, the prediction 3.2 s before: both
+    # outside the window, so the walk ends at planning
+    t = {**APPENDIX_A, "/apollo/perception/obstacles": 3.5, "/apollo/prediction": 3.8}
+    r = find_initial_module(cmg, t, "/apollo/control", 3.0)
+    assert r.deviating_module == "planning" and r.fallback is None  # not the commands' writer
+    # from perception's input only: the walk from the obstacles names perception
+    p = past_the_window(cmg, t, r, 3.0, written_by=["perception"])
+    assert p.deviating_module == "perception"
+    assert p.path[-2:] == ("/apollo/perception/obstacles", "perception")
+    assert "no input of planning departed within 3 s before planning departed (7 s)" in p.fallback
+    # from any input: the latest, the prediction, whose own window reaches the obstacles
+    assert past_the_window(cmg, t, r, 3.0).deviating_module == "perception"
+    # the chassis departed earlier too (1.5 s): from canbus's input the walk names canbus
+    assert past_the_window(cmg, t, r, 3.0, written_by=["canbus"]).deviating_module == "canbus"
+    # no input written by the module asked for, or none before the window: unchanged
+    assert past_the_window(cmg, t, r, 3.0, written_by=["control"]) is r
+    assert past_the_window(cmg, APPENDIX_A, _run(APPENDIX_A), 3.0, written_by=["perception"]) \
+        .deviating_module == "prediction"

@@ -135,6 +135,11 @@ class _Walks:
         path = ("/control", "control", "/planning", "planning") if module == "planning" else ()
         return SimpleNamespace(deviating_module=module, path=path, fallback=None)
 
+    def walk_past_window(self, written_by):
+        from types import SimpleNamespace
+
+        return SimpleNamespace(deviating_module=None, path=(), fallback=None)
+
 
 def test_the_walk_goes_on_past_a_module_substitution_cleared():
     from rocas.pipeline.confidence import _answer
@@ -190,3 +195,47 @@ def test_an_abstaining_chosen_reference_gives_way_to_one_that_names_a_module():
     # the majority rule as before
     two = _Opinion(perception="agrees", planning="disagrees")
     assert adopted_answer(answers("planning", "perception", "perception"), two) == 1
+
+
+class _Window:
+    """A stand-in for DiffResult whose walk past the window names ``module``."""
+
+    def __init__(self, module):
+        self.module = module
+        self.asked = []
+
+    def walk_past_window(self, written_by):
+        from types import SimpleNamespace
+
+        self.asked.append(tuple(written_by))
+        return SimpleNamespace(deviating_module=self.module,
+                               path=("/control", "control", "/planning", "planning",
+                                     "/perception/brake_signal", "perception"),
+                               fallback="no input of planning departed within 3 s before planning "
+                                        "departed (10.6 s), but /perception/brake_signal departed "
+                                        "earlier (7.4 s), so the walk goes on from it")
+
+
+def test_the_walk_goes_on_past_the_window_only_to_the_module_substitution_names():
+    from rocas.pipeline.confidence import _answer
+
+    found = {"deviating_module": "planning", "path": ["/control", "control", "/planning", "planning"],
+             "fallback": None, "entries": None}
+    # the red truck met at a lower speed: its brake signal departs 3.2 s before planning
+    sub = _Opinion(module="perception", perception="agrees")
+    window = _Window("perception")
+    taken = _answer(found, sub, lambda: window)
+    assert taken["module"] == "perception" and window.asked == [("perception",)]
+    assert taken["window_passed"].endswith("so the walk goes on from it; module substitution "
+                                           "names perception")
+    # the walk past the window reaches another module than substitution's: unchanged
+    assert _answer(found, sub, lambda: _Window("prediction"))["module"] == "planning"
+    # substitution names none, or the same module, or the answer came from the fallback or past
+    # a cleared module: the window stays, and the diff is not read
+    unread = _Window("perception")
+    for opinion, answer in ((_Opinion(planning="consistent"), found),
+                            (_Opinion(module="planning", planning="agrees"), found),
+                            (sub, {**found, "fallback": "no change point"}),
+                            (None, found)):
+        assert _answer(answer, opinion, lambda: unread)["module"] == answer["deviating_module"]
+    assert unread.asked == []
