@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from rocas.pipeline.confidence import phase_confidence
+from rocas.pipeline.confidence import phase_confidence, start_second_opinion
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.cyber_phase import phase_cyber
 from rocas.pipeline.diff_phase import phase_diff
@@ -102,6 +102,7 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
     replay = run.state["done"]["replay"]
     if not replay["reproduced"] or run.accident is None:
         return write_report(run.out, build_report(run.state, run.accident, "not_reproduced"))
+    start_second_opinion(run)  # needs only the accident: on a worker while phase II runs
     physical = phase_physical(run)
     if "chosen" not in physical:
         return write_report(run.out, build_report(run.state, run.accident, "no_reference"))
