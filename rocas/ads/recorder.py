@@ -1,4 +1,5 @@
-"""The built-in ADS's messages: each module's output of variant 0 as its channel's protobuf.
+"""The built-in ADS's messages: each module's output of one variant (variant 0 unless told) as
+its channel's protobuf.
 
 :class:`AdsPublisher` turns one step's :class:`rocas.ads.stack.TickOutputs` into messages
 (headers with module name and per-topic sequence numbers) and hands them to a message sink: in
@@ -45,9 +46,11 @@ _NS = 1_000_000_000
 
 
 class AdsPublisher:
-    """Publishes variant 0 of the ADS's step outputs, with per-topic sequence numbers."""
+    """Publishes one variant (``variant``, a row of the batch) of the ADS's step outputs, with
+    per-topic sequence numbers."""
 
-    def __init__(self, world: BatchWorld) -> None:
+    def __init__(self, world: BatchWorld, variant: int = 0) -> None:
+        self._variant = variant
         self._seq: dict[str, int] = {}
         self._lane_ids = world.road.lane_ids
         self._light_ids = world.light_ids
@@ -69,34 +72,35 @@ class AdsPublisher:
 
     def publish(self, sink: MessageSink, tick: int, t_ns: int, out: TickOutputs) -> None:
         """Write step ``tick``'s messages (log time ``t_ns`` [ns]) to ``sink``."""
+        row = self._variant
         self._sink = sink
         t = t_ns / _NS
         loc = out.localization
         m = localization_pb2.LocalizationEstimate()
         self._header(m, LOCALIZATION, TOPIC_POSE, t, tick)
         pose = m.pose
-        pose.position.x, pose.position.y = float(loc.x[0]), float(loc.y[0])
-        pose.heading = float(loc.heading[0])
-        pose.linear_velocity.x, pose.linear_velocity.y = float(loc.vx[0]), float(loc.vy[0])
-        pose.linear_acceleration.x = float(loc.ax[0])
-        pose.linear_acceleration.y = float(loc.ay[0])
-        pose.angular_velocity = float(loc.yaw_rate[0])
-        lane = int(loc.lane[0])
+        pose.position.x, pose.position.y = float(loc.x[row]), float(loc.y[row])
+        pose.heading = float(loc.heading[row])
+        pose.linear_velocity.x, pose.linear_velocity.y = float(loc.vx[row]), float(loc.vy[row])
+        pose.linear_acceleration.x = float(loc.ax[row])
+        pose.linear_acceleration.y = float(loc.ay[row])
+        pose.angular_velocity = float(loc.yaw_rate[row])
+        lane = int(loc.lane[row])
         m.lane_id = self._lane_ids[lane] if lane >= 0 else ""
-        m.lane_s = float(loc.lane_s[0])
+        m.lane_s = float(loc.lane_s[row])
         self._write(TOPIC_POSE, m, t_ns)
 
         ch = out.chassis
         c = chassis_pb2.Chassis()
         self._header(c, CANBUS, TOPIC_CHASSIS, t, tick)
         c.engine_started = True
-        c.speed_mps = float(ch.speed[0])
-        c.odometer_m = float(ch.odometer[0])
-        c.throttle_percentage = float(ch.throttle[0])
-        c.brake_percentage = float(ch.brake[0])
-        c.steering_percentage = float(ch.steering[0])
+        c.speed_mps = float(ch.speed[row])
+        c.odometer_m = float(ch.odometer[row])
+        c.throttle_percentage = float(ch.throttle[row])
+        c.brake_percentage = float(ch.brake[row])
+        c.steering_percentage = float(ch.steering[row])
         c.gear_location = chassis_pb2.Chassis.GEAR_DRIVE
-        c.driving_mode = (chassis_pb2.Chassis.EMERGENCY_MODE if bool(ch.emergency[0])
+        c.driving_mode = (chassis_pb2.Chassis.EMERGENCY_MODE if bool(ch.emergency[row])
                           else chassis_pb2.Chassis.COMPLETE_AUTO_DRIVE)
         self._write(TOPIC_CHASSIS, c, t_ns)
 
@@ -108,31 +112,32 @@ class AdsPublisher:
         ctl = out.control
         cc = control_pb2.ControlCommand()
         self._header(cc, CONTROL, TOPIC_CONTROL, t, tick)
-        cc.throttle = float(ctl.throttle[0])
-        cc.brake = float(ctl.brake[0])
-        cc.steering_target = float(ctl.steering_target[0])
-        cc.steering_rate = float(ctl.steering_rate[0])
-        cc.acceleration = float(ctl.acceleration[0])
-        cc.estop = bool(ctl.estop[0])
-        cc.lateral_error = float(ctl.lateral_error[0])
-        cc.heading_error = float(ctl.heading_error[0])
-        cc.station_error = float(ctl.station_error[0])
-        cc.speed_error = float(ctl.speed_error[0])
+        cc.throttle = float(ctl.throttle[row])
+        cc.brake = float(ctl.brake[row])
+        cc.steering_target = float(ctl.steering_target[row])
+        cc.steering_rate = float(ctl.steering_rate[row])
+        cc.acceleration = float(ctl.acceleration[row])
+        cc.estop = bool(ctl.estop[row])
+        cc.lateral_error = float(ctl.lateral_error[row])
+        cc.heading_error = float(ctl.heading_error[row])
+        cc.station_error = float(ctl.station_error[row])
+        cc.speed_error = float(ctl.speed_error[row])
         self._write(TOPIC_CONTROL, cc, t_ns)
 
     def _perception(self, tick: int, t: float, t_ns: int, out: TickOutputs
                     ) -> dict[int, perception_pb2.PerceptionObstacle]:
+        row = self._variant
         per = out.perception
         assert per is not None
         msg = perception_pb2.PerceptionObstacles()
         self._header(msg, PERCEPTION, TOPIC_OBSTACLES, t, tick)
-        msg.ego_position.x = float(per.ego_x[0])
-        msg.ego_position.y = float(per.ego_y[0])
-        msg.ego_heading = float(per.ego_heading[0])
-        slots = np.flatnonzero(per.published[0])
+        msg.ego_position.x = float(per.ego_x[row])
+        msg.ego_position.y = float(per.ego_y[row])
+        msg.ego_heading = float(per.ego_heading[row])
+        slots = np.flatnonzero(per.published[row])
         built: dict[int, perception_pb2.PerceptionObstacle] = {}
         if len(slots):
-            cols = {f: getattr(per, f)[0, slots].tolist() for f in (
+            cols = {f: getattr(per, f)[row, slots].tolist() for f in (
                 "track_id", "type", "sub_type", "color", "x", "y", "theta", "vx", "vy", "ax", "ay",
                 "length", "width", "height", "confidence", "tracking_time")}
             for k, slot in enumerate(slots.tolist()):
@@ -161,54 +166,55 @@ class AdsPublisher:
 
         tl = perception_pb2.TrafficLightDetection()
         self._header(tl, PERCEPTION, TOPIC_TRAFFIC_LIGHT, t, tick)
-        det = per.tl_detected[0]
+        det = per.tl_detected[row]
         for i in np.flatnonzero(det).tolist():
             light = tl.traffic_light.add()
             light.id = self._light_ids[i]
-            light.color = int(per.tl_color[0, i])
-            light.confidence = float(per.tl_confidence[0, i])
-            light.distance_m = float(per.tl_distance[0, i])
-        sel = int(per.tl_selected[0])
+            light.color = int(per.tl_color[row, i])
+            light.confidence = float(per.tl_confidence[row, i])
+            light.distance_m = float(per.tl_distance[row, i])
+        sel = int(per.tl_selected[row])
         tl.selected_light_id = self._light_ids[sel] if sel >= 0 else ""
         tl.contain_lights = bool(det.any())
         self._write(TOPIC_TRAFFIC_LIGHT, tl, t_ns)
 
         b = perception_pb2.BrakeSignal()
         self._header(b, PERCEPTION, TOPIC_BRAKE_SIGNAL, t, tick)
-        b.brake_probability = float(per.brake_probability[0])
-        b.brake_threshold = float(per.brake_threshold[0])
-        b.brake = bool(per.brake[0])
+        b.brake_probability = float(per.brake_probability[row])
+        b.brake_threshold = float(per.brake_threshold[row])
+        b.brake = bool(per.brake[row])
         self._write(TOPIC_BRAKE_SIGNAL, b, t_ns)
         return built
 
     def _prediction(self, tick: int, t: float, t_ns: int, out: TickOutputs,
                     obstacles: dict[int, perception_pb2.PerceptionObstacle]) -> None:
+        row = self._variant
         pred = out.prediction
         assert pred is not None
         msg = prediction_pb2.PredictionObstacles()
         self._header(msg, PREDICTION, TOPIC_PREDICTION, t, tick)
-        horizon = float(pred.horizon[0])
+        horizon = float(pred.horizon[row])
         msg.start_timestamp = t
         msg.end_timestamp = t + horizon
-        valid = pred.traj_valid[0]
-        times = pred.traj_t[0, valid].tolist()
-        prob = float(pred.probability[0])
+        valid = pred.traj_valid[row]
+        times = pred.traj_t[row, valid].tolist()
+        prob = float(pred.probability[row])
         for slot, obstacle in obstacles.items():
             po = msg.prediction_obstacle.add()
             po.perception_obstacle.CopyFrom(obstacle)
             po.timestamp = t
             po.predicted_period = horizon
-            static = bool(pred.is_static[0, slot])
+            static = bool(pred.is_static[row, slot])
             po.is_static = static
-            po.intent = int(pred.intent[0, slot])
+            po.intent = int(pred.intent[row, slot])
             if static:
                 continue
             tr = po.trajectory.add()
             tr.probability = prob
-            xs = pred.traj_x[0, slot, valid].tolist()
-            ys = pred.traj_y[0, slot, valid].tolist()
-            hs = pred.traj_heading[0, slot, valid].tolist()
-            vs = pred.traj_v[0, slot, valid].tolist()
+            xs = pred.traj_x[row, slot, valid].tolist()
+            ys = pred.traj_y[row, slot, valid].tolist()
+            hs = pred.traj_heading[row, slot, valid].tolist()
+            vs = pred.traj_v[row, slot, valid].tolist()
             for x, y, h, v, tt in zip(xs, ys, hs, vs, times, strict=True):
                 pt = tr.trajectory_point.add()
                 pt.position.x, pt.position.y = x, y
@@ -216,13 +222,14 @@ class AdsPublisher:
         self._write(TOPIC_PREDICTION, msg, t_ns)
 
     def _planning(self, tick: int, t: float, t_ns: int, out: TickOutputs) -> None:
+        row = self._variant
         plan = out.planning
         per = out.perception
         assert plan is not None and per is not None
         msg = planning_pb2.ADCTrajectory()
         self._header(msg, PLANNING, TOPIC_PLANNING, t, tick)
-        valid = plan.valid[0]
-        cols = [getattr(plan, f)[0, valid].tolist() for f in ("x", "y", "theta", "kappa", "s",
+        valid = plan.valid[row]
+        cols = [getattr(plan, f)[row, valid].tolist() for f in ("x", "y", "theta", "kappa", "s",
                                                                 "v", "a", "t")]
         s0 = cols[4][0]
         for x, y, th, kp, s, v, a, tt in zip(*cols, strict=True):
@@ -232,21 +239,21 @@ class AdsPublisher:
         msg.total_path_length = cols[4][-1] - s0
         msg.total_path_time = cols[7][-1]
         md = msg.main_decision
-        md.type = int(plan.main[0])
-        md.stop_distance = float(plan.stop_distance[0])
-        md.reason = REASONS[int(plan.reason[0])]
-        tracks = per.track_id[0]
-        for slot in np.flatnonzero(plan.decision[0]).tolist():
+        md.type = int(plan.main[row])
+        md.stop_distance = float(plan.stop_distance[row])
+        md.reason = REASONS[int(plan.reason[row])]
+        tracks = per.track_id[row]
+        for slot in np.flatnonzero(plan.decision[row]).tolist():
             d = msg.object_decision.add()
             d.id = str(int(tracks[slot]))
-            d.type = int(plan.decision[0, slot])
-            d.distance_s = float(plan.decision_s[0, slot])
+            d.type = int(plan.decision[row, slot])
+            d.distance_s = float(plan.decision_s[row, slot])
             if d.type == planning_pb2.ObjectDecision.NUDGE:
-                d.lateral_offset = float(plan.nudge_offset[0])
-        msg.estop = bool(plan.estop[0])
-        msg.estop_reason = int(plan.estop_reason[0])
-        lane = int(plan.lane[0])
+                d.lateral_offset = float(plan.nudge_offset[row])
+        msg.estop = bool(plan.estop[row])
+        msg.estop_reason = int(plan.estop_reason[row])
+        lane = int(plan.lane[row])
         msg.lane_id = self._lane_ids[lane] if lane >= 0 else ""
-        msg.cruise_speed = float(plan.cruise_speed[0])
+        msg.cruise_speed = float(plan.cruise_speed[row])
         self._write(TOPIC_PLANNING, msg, t_ns)
 

@@ -49,7 +49,7 @@ class AdsRun:
         self.stack = AdsStack(world, dict(params), oracle_modules)
         self.out: TickOutputs | None = None
         self._prev_xy: tuple[np.ndarray, np.ndarray] | None = None
-        self._publisher: AdsPublisher | None = None
+        self._publishers: dict[int, AdsPublisher] = {}
         self._world = world
 
     def step(self, obs: Observation) -> Actuation:
@@ -66,11 +66,12 @@ class AdsRun:
         return Actuation(accel, curvature, out.control.estop | plan.estop,
                          STOP_JUSTIFIED[plan.reason])
 
-    def publish(self, sink: MessageSink, tick: int, t_ns: int) -> None:
-        if self._publisher is None:
-            self._publisher = AdsPublisher(self._world)
+    def publish(self, sink: MessageSink, tick: int, t_ns: int, variant: int = 0) -> None:
+        publisher = self._publishers.get(variant)
+        if publisher is None:
+            publisher = self._publishers[variant] = AdsPublisher(self._world, variant)
         assert self.out is not None
-        self._publisher.publish(sink, tick, t_ns, self.out)
+        publisher.publish(sink, tick, t_ns, self.out)
 
     def digest(self) -> dict[str, np.ndarray]:
         assert self.out is not None
@@ -94,8 +95,10 @@ def simulate_batch(
     *,
     track_outputs: bool = False,
     oracle_modules: OracleModules = frozenset(),
+    outputs: Mapping[int, str | os.PathLike[str]] | None = None,
 ) -> BatchResult:
-    """Simulate N variants together with the built-in ADS (batch mode; records nothing).
+    """Simulate N variants together with the built-in ADS (batch mode; records only the
+    variants named in ``outputs``).
 
     Args:
         scenarios: one scenario (repeated to match ``params``/``seeds``) or N variants of one
@@ -108,6 +111,9 @@ def simulate_batch(
         oracle_modules: modules whose output is replaced by ground truth (module
             substitution, :mod:`rocas.ads.oracle`): one set of names for every variant, or N
             sets; empty (the default) runs the ADS as it is.
+
+        outputs: variant -> MCAP file: that variant is also recorded, the very file
+            :func:`simulate` with ``output`` writes for it alone.
 
     Returns:
         :class:`BatchResult`; variant i is identical to ``simulate(scenarios[i], params[i],
@@ -124,7 +130,9 @@ def simulate_batch(
         raise UsageError(f"got {n} scenarios but {len(params)} parameter sets")
     sets = [resolve_params(s, p) for s, p in zip(scenarios, params, strict=True)]
     return engine.simulate_batch(scenarios, ads_factory(sets, oracle_modules), seeds,
-                                 digest_modules=MODULE_ORDER if track_outputs else None)
+                                 digest_modules=MODULE_ORDER if track_outputs else None,
+                                 outputs=outputs, channels=CHANNELS,
+                                 param_overrides=[p.overrides() for p in sets] if outputs else None)
 
 
 def simulate(

@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from rocas.pipeline.confidence import phase_confidence
+from rocas.pipeline.confidence import phase_confidence, start_second_opinion
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.cyber_phase import phase_cyber
 from rocas.pipeline.diff_phase import phase_diff
@@ -75,18 +75,29 @@ def analyze(
 
 def _warm_up(executor: Executor, cfg: AnalyzeConfig) -> None:
     """Start the executor's workers (when it has some to start) while the replay runs, if the
-    analysis will use them: the confidence phase's alternate references, or a validation
-    whose waves give every worker PARALLEL_MIN_BATCH variants. Their start-up (a second or so
+    analysis will use them: module substitution, started on one ahead of the confidence phase
+    when there are alternate references to ask (start_second_opinion), or a validation whose
+    waves give every worker PARALLEL_MIN_BATCH variants. Their start-up (a second or so
     of imports each) then overlaps the replay instead of delaying the first phase that needs
     them."""
-    from rocas.pipeline.evaluate import PARALLEL_MIN_BATCH, prepare_worker
+    from rocas.pipeline.evaluate import prepare_worker
 
     warm_up = getattr(executor, "warm_up", None)
     workers = max(1, getattr(executor, "workers", 1))
     if warm_up is None or workers == 1:
         return
-    if cfg.alternate_references or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH:
+    if uses_workers(executor, cfg):
         warm_up(prepare_worker)
+
+
+def uses_workers(executor: Executor, cfg: AnalyzeConfig) -> bool:
+    """Whether the analysis starts the executor's workers anyway (see _warm_up): then module
+    substitution can run on one of them ahead of the confidence phase at no start-up cost."""
+    from rocas.pipeline.evaluate import PARALLEL_MIN_BATCH
+
+    workers = max(1, getattr(executor, "workers", 1))
+    return workers > 1 and bool(cfg.alternate_references
+                                or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH)
 
 
 def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:
@@ -102,6 +113,8 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
     replay = run.state["done"]["replay"]
     if not replay["reproduced"] or run.accident is None:
         return write_report(run.out, build_report(run.state, run.accident, "not_reproduced"))
+    if uses_workers(run.executor, run.cfg) or max(1, getattr(run.executor, "workers", 1)) == 1:
+        start_second_opinion(run)  # needs only the accident: on a worker while phase II runs
     physical = phase_physical(run)
     if "chosen" not in physical:
         return write_report(run.out, build_report(run.state, run.accident, "no_reference"))

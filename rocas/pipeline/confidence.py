@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rocas._fs import atomic_path, write_text_atomic
+from rocas.pipeline.evaluate import VariantTask, record
 from rocas.pipeline.physical import apply_physical
 from rocas.pipeline.rundir import Run
 from rocas.scenarios.model import Scenario
@@ -116,15 +117,17 @@ def phase_confidence(run: Run) -> dict[str, Any]:
     chosen_diff = run.state["done"]["diff"]
     alternates = alternate_references(physical.get("front", []), physical["chosen"],
                                       run.cfg.alternate_references)
-    # each alternate reference is simulated on a worker of its own while this process asks
-    # module substitution: three independent simulations of half a second or so each; the
-    # diffs (a few hundredths of a second) are taken here, which spares the workers the
-    # differential analysis's imports
-    jobs = [submit(run.executor, record_reference, apply_physical(scn, Mutation(dict(cand["mutation"]))),
-                   run.out / f"reference_{i}.mcap") for i, cand in enumerate(alternates, start=1)]
+    # module substitution needs only the accident: it was started on a worker before phase II
+    # (start_second_opinion); the alternate references are recorded here, all in one batch
+    # (each file is the one its run alone records, at one rollout's fixed cost per tick
+    # instead of one each)
+    started = run.ahead.pop("second_opinion", None)
+    record([(VariantTask(s, (), s.seed), run.out / f"reference_{i}.mcap")
+            for i, s in enumerate((apply_physical(scn, Mutation(dict(cand["mutation"])))
+                                   for cand in alternates), start=1)])
     opinion = None
-    if run.cfg.second_opinion and scn.ego.stack == "ads":  # the built-in ADS's oracles
-        opinion = second_opinion(scn)
+    if wants_second_opinion(run):
+        opinion = started.result() if started is not None else second_opinion(scn)
     answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
                 **_answer(chosen_diff, opinion, lambda: diff(
                     run.out / "accident.mcap", run.out / "reference.mcap", delta_s=run.cfg.delta_s))}]
@@ -134,8 +137,7 @@ def phase_confidence(run: Run) -> dict[str, Any]:
             **chosen_diff, "deviating_module": answers[0]["module"], "path": answers[0]["path"],
             "fallback": answers[0]["fallback"], **passed}
     diffs: list[dict[str, Any] | None] = [None]
-    for i, (cand, job) in enumerate(zip(alternates, jobs, strict=True), start=1):
-        job.result()
+    for i, cand in enumerate(alternates, start=1):
         result = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
                       delta_s=run.cfg.delta_s)
         found = result.to_json()
@@ -189,6 +191,22 @@ def adopted_answer(answers: list[dict[str, Any]], opinion: Any) -> int:
         return next((i for i, a in enumerate(answers) if a["module"] is not None and (
             opinion is None or opinion.stance(a["module"]) in _SUPPORTS)), 0)
     return 0
+
+
+def wants_second_opinion(run: Run) -> bool:
+    """Whether the confidence phase asks module substitution (the built-in ADS's oracles)."""
+    assert run.scenario is not None
+    return run.cfg.second_opinion and run.scenario.ego.stack == "ads"
+
+
+def start_second_opinion(run: Run) -> None:
+    """Start module substitution's batch on a worker (``run.ahead["second_opinion"]``) when the
+    confidence phase will ask for it: it needs only the accident scenario, so it runs while
+    phase II searches in this process (with one worker, here and now)."""
+    from rocas.pipeline.substitution import second_opinion
+
+    if not run.done("confidence") and wants_second_opinion(run):
+        run.ahead["second_opinion"] = submit(run.executor, second_opinion, run.scenario)
 
 
 def _answer(found: dict[str, Any], opinion: Any, result: Callable[[], DiffResult] | None = None

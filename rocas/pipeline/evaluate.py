@@ -9,6 +9,7 @@ the number of workers or the executor.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -50,18 +51,41 @@ class VariantResult:
     actors_xy: np.ndarray
 
 
-def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
+def run_batch(tasks: Sequence[VariantTask],
+              outputs: Mapping[int, str | os.PathLike[str]] | None = None) -> list[VariantResult]:
     """Simulate tasks that share one scenario structure in one batch (picklable entry point),
-    with the stack their scenario names."""
+    with the stack their scenario names; ``outputs`` (task index -> MCAP file) also records
+    those tasks, each the very file its run alone records
+    (:func:`rocas.stacks.rollout.simulate_batch`)."""
     from rocas.stacks.rollout import simulate_batch
 
     res = simulate_batch([t.scenario for t in tasks], params=[dict(t.params) for t in tasks],
-                         seeds=[t.seed for t in tasks])
+                         seeds=[t.seed for t in tasks], outputs=outputs)
     return [
         VariantResult(res.outcomes[i], np.ascontiguousarray(res.ego[i, :, :2]),
                       np.ascontiguousarray(res.actors[i, :, :, :2]))
         for i in range(len(tasks))
     ]
+
+
+def run_job(job: tuple[Sequence[VariantTask], Sequence[tuple[VariantTask, str]]]
+            ) -> list[VariantResult]:
+    """``run_batch`` of a batch's tasks with further runs to record appended to it as extra
+    rows (``(task, MCAP path)``); the results of the tasks only (picklable entry point)."""
+    tasks, recordings = job
+    rows = [*tasks, *(t for t, _ in recordings)]
+    outputs = {len(tasks) + k: path for k, (_, path) in enumerate(recordings)}
+    return run_batch(rows, outputs)[:len(tasks)]
+
+
+def record(runs: Sequence[tuple[VariantTask, str | os.PathLike[str]]]) -> list[VariantResult]:
+    """Record each task to its MCAP file, as ``simulate(..., output=path)`` would, in one batch
+    in this process: independent recordings share one batch's fixed cost per tick (about
+    2 ms a tick whatever the batch's size), and each file is bit for bit its run alone's.
+    The tasks must share one scenario structure."""
+    if not runs:
+        return []
+    return run_batch([t for t, _ in runs], {i: path for i, (_, path) in enumerate(runs)})
 
 
 #: the smallest batch worth a worker of its own: tasks that fill one batch but give each of
@@ -71,7 +95,8 @@ def run_batch(tasks: Sequence[VariantTask]) -> list[VariantResult]:
 PARALLEL_MIN_BATCH = 64
 
 
-def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int = 256
+def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int = 256,
+             recordings: Sequence[tuple[VariantTask, str | os.PathLike[str]]] = ()
              ) -> list[VariantResult]:
     """Run ``tasks`` in batches of at most ``batch_size`` on ``executor``; results in task order.
 
@@ -80,9 +105,15 @@ def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int =
     allows, and, when that is more than one or the tasks give every worker at least
     PARALLEL_MIN_BATCH, into a multiple of the executor's workers so none waits idle. Fewer
     tasks run as one batch (a local executor runs a single batch in this process, without
-    starting workers)."""
+    starting workers).
+
+    ``recordings`` (``(task, MCAP path)``, tasks of the same scenario structure) are recorded
+    as extra rows of the first batch, each the file its run alone writes: a recording costs
+    the batch a few milliseconds instead of a rollout's fixed cost; their results are not
+    returned. Without tasks they run as one batch here."""
     tasks = list(tasks)
     if not tasks:
+        record(recordings)
         return []
     count = -(-len(tasks) // max(1, batch_size))
     workers = max(1, getattr(executor, "workers", 1))
@@ -91,7 +122,13 @@ def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int =
     size = -(-len(tasks) // count)
     batches = [tasks[i:i + size] for i in range(0, len(tasks), size)]
     out: list[VariantResult] = []
-    for chunk in executor.map(run_batch, batches):
+    if recordings:
+        jobs = [(b, [(t, os.fspath(p)) for t, p in recordings] if i == 0 else [])
+                for i, b in enumerate(batches)]
+        chunks = executor.map(run_job, jobs)
+    else:
+        chunks = executor.map(run_batch, batches)
+    for chunk in chunks:
         out.extend(chunk)
     return out
 

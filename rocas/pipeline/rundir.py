@@ -25,7 +25,7 @@ import hashlib
 import json
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +60,9 @@ class Run:
     original: VariantResult | None = None
     accident: Accident | None = None
     accident_tick: int = 0
+    #: work started ahead of the phase that needs it, on a worker while earlier phases run
+    #: (name -> future): the phase takes it from here, or does the work itself if absent
+    ahead: dict[str, Any] = field(default_factory=dict)
 
     @property
     def h1_horizon(self) -> int:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from rocas._fs import write_text_atomic
-from rocas.pipeline.evaluate import VariantTask, evaluate, is_accident, params_tuple
+from rocas.pipeline.evaluate import VariantTask, evaluate, is_accident, params_tuple, record
 from rocas.pipeline.rundir import Run
 from rocas.pipeline.sequential import looks, regression_test
 from rocas.scenarios.model import Scenario
@@ -129,7 +129,8 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
 
     first = sims.run([VariantTask(run.scenario, c, run.scenario.seed) for c in configs]
                      + [VariantTask(v, params_tuple(fix), v.seed) for v in variants]
-                     + original[:schedule[0] if n else 0], h1_of=range(len(configs)))
+                     + original[:schedule[0] if n else 0], h1_of=range(len(configs)),
+                     recordings=record_fix(run, fix))
     on_accident, fixed_acc, orig_acc = (first[:len(configs)], first[len(configs):len(configs) + n],
                                         first[len(configs) + n:])
     h1 = [found["h1_m2"][str(i)] for i in range(len(configs))]
@@ -196,6 +197,17 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     return result
 
 
+def record_fix(run: Run, fix: Mapping[str, float]) -> list[tuple[VariantTask, Path]]:
+    """The recording of the accident with the fix (``fixed.mcap``), unless it was made: phase
+    V records it as an extra row of its first batch (a few milliseconds there; alone, a whole
+    rollout's fixed cost), the very file a run of its own writes."""
+    path = run.out / "fixed.mcap"
+    assert run.scenario is not None
+    if path.exists():
+        return []
+    return [(VariantTask(run.scenario, params_tuple(fix), run.scenario.seed), path)]
+
+
 def _rate(accidents: list[bool]) -> float:
     """The share of runs without an accident."""
     return sum(not a for a in accidents) / len(accidents)
@@ -234,8 +246,13 @@ class _Simulations:
         self.run_, self.found, self.planned, self.done = run, found, planned, 0
         self._said: tuple[int, int] | None = None
 
-    def run(self, tasks: list[VariantTask], h1_of: range = range(0)) -> list[bool]:
+    def run(self, tasks: list[VariantTask], h1_of: range = range(0),
+            recordings: list[tuple[VariantTask, Path]] | None = None) -> list[bool]:
+        """The tasks' accident flags; ``recordings`` (``(task, MCAP path)``) are recorded as
+        extra rows of the first batch run (or alone, when every task was done before an
+        interruption)."""
         run, found, first = self.run_, self.found, self.done
+        recordings = list(recordings or [])
         step = run.cfg.batch_size * VALIDATION_SLICE_BATCHES * max(1, getattr(run.executor, "workers", 1))
         while self.done < first + len(tasks):
             if len(found["accident"]) > self.done:  # finished before an interruption
@@ -243,7 +260,9 @@ class _Simulations:
                 continue
             self.report()
             chunk = tasks[self.done - first:self.done - first + step]
-            for i, r in enumerate(evaluate(run.executor, chunk, run.cfg.batch_size), self.done):
+            results = evaluate(run.executor, chunk, run.cfg.batch_size, recordings)
+            recordings = []
+            for i, r in enumerate(results, self.done):
                 found["accident"].append(is_accident(r.outcome))
                 if i - first in h1_of:
                     assert run.original is not None
@@ -251,6 +270,7 @@ class _Simulations:
                                                                run.h1_horizon)
             self.done += len(chunk)
             write_text_atomic(run.out / "validation.ckpt", json.dumps(found))
+        record(recordings)
         return found["accident"][first:first + len(tasks)]
 
     def report(self) -> None:

@@ -78,7 +78,8 @@ def initial_ego(world: BatchWorld, scenarios: Sequence[Scenario]) -> VehicleStat
 
 def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
             sink: MessageSink | None = None, digest_modules: Sequence[str] | None = None,
-            on_tick: Callable[[int], None] | None = None) -> BatchResult:
+            on_tick: Callable[[int], None] | None = None,
+            sinks: Mapping[int, MessageSink] | None = None) -> BatchResult:
     """Step the compiled ``world`` (N variants of ``scenarios``) with the stack ``run``.
 
     Args:
@@ -86,6 +87,9 @@ def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
         scenarios: the N scenarios it was compiled from (start states).
         run: the stack, built for ``world``.
         sink: recording mode: the stack publishes variant 0's messages here each step.
+        sinks: recording mode for several rows: variant i's messages go to ``sinks[i]`` (the
+            stack's ``publish`` must take ``variant=i`` for i > 0, as the built-in ADS's does);
+            the others run as in batch mode. A row's messages are those of its run alone.
         digest_modules: sum the stack's per-module output digests over the run, one column per
             named module (:attr:`BatchResult.digests`); None: skip them.
         on_tick: called with the step index after each step.
@@ -116,14 +120,18 @@ def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
 
     record(0)
     dt_ns = round(world.dt_s * _NS)
+    publish = sorted((({0: sink} if sink is not None else {}) | dict(sinks or {})).items())
     for tick in range(steps):
         t = tick * world.dt_s
         b = actors.body
         act = run.step(Observation(tick, t, ego.x, ego.y, ego.yaw, ego.speed, accel, b.x, b.y,
                                    b.yaw, b.speed, {"ego": ego, "actors": b,
                                                     "actor_state": actors}))
-        if sink is not None:
-            run.publish(sink, tick, tick * dt_ns)
+        for i, row_sink in publish:
+            if i == 0:
+                run.publish(row_sink, tick, tick * dt_ns)
+            else:
+                run.publish(row_sink, tick, tick * dt_ns, variant=i)  # type: ignore[call-arg]
         if digests is not None and columns is not None:
             for name, value in run.digest().items():
                 digests[:, columns[name]] += value
@@ -144,8 +152,12 @@ def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
 
 def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
                    seeds: Sequence[int] | None = None, *,
-                   digest_modules: Sequence[str] | None = None) -> BatchResult:
-    """Simulate N variants of one structure together (batch mode; records nothing).
+                   digest_modules: Sequence[str] | None = None,
+                   outputs: Mapping[int, str | os.PathLike[str]] | None = None,
+                   channels: Sequence[Channel] = (),
+                   param_overrides: Sequence[Mapping[str, float]] | None = None) -> BatchResult:
+    """Simulate N variants of one structure together (batch mode), recording the rows named in
+    ``outputs``.
 
     Args:
         scenarios: N variants of one structure (same map, ego route and entity ids;
@@ -154,6 +166,11 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
             variant are the factory's business).
         seeds: N seeds; None means each scenario's seed.
         digest_modules: also return per-module output fingerprints, one column per name.
+        outputs: row -> MCAP file: that row is written as :func:`simulate` writes a run alone
+            (the same file, bit for bit), with ``channels`` and the row's
+            ``param_overrides``; the stack must publish rows other than 0
+            (:func:`rollout`'s ``sinks``).
+        channels, param_overrides: what the recordings carry (one overrides mapping per row).
 
     Returns:
         :class:`BatchResult`; variant i is identical to a run of ``scenarios[i]`` alone
@@ -162,7 +179,22 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
     scenarios = list(scenarios)
     seeds = [s.seed for s in scenarios] if seeds is None else list(seeds)
     world = compile_batch(scenarios, seeds)
-    return rollout(world, scenarios, stack(world), digest_modules=digest_modules)
+    if not outputs:
+        return rollout(world, scenarios, stack(world), digest_modules=digest_modules)
+    import contextlib
+
+    from rocas.sim.recorder import RunRecorder
+
+    with contextlib.ExitStack() as opened:
+        recorders = {i: opened.enter_context(RunRecorder(
+            path, scenarios[i], channels,
+            param_overrides[i] if param_overrides is not None else {}, seeds[i]))
+            for i, path in sorted(outputs.items())}
+        res = rollout(world, scenarios, stack(world), digest_modules=digest_modules,
+                      sinks={i: rec.write for i, rec in recorders.items()})
+        for i, rec in recorders.items():
+            rec.finish(res.outcomes[i])
+    return res
 
 
 def simulate(scenario: Scenario, stack: StackFactory, seed: int | None = None, *,

@@ -81,7 +81,9 @@ class StackRun(Protocol):
         ...
 
     def publish(self, sink: MessageSink, tick: int, t_ns: int) -> None:
-        """Write variant 0's messages of the last step (recording mode only)."""
+        """Write variant 0's messages of the last step (recording mode only). A stack that can
+        record other rows of a batch too (the built-in ADS) takes ``variant=i`` as well:
+        :func:`rocas.sim.engine.rollout` with ``sinks``."""
         ...
 
     def digest(self) -> dict[str, np.ndarray]:

@@ -168,10 +168,15 @@ def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
 
 
 def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float]],
-                   seeds: Sequence[int]) -> Rollout:
+                   seeds: Sequence[int], *,
+                   outputs: Mapping[int, str | os.PathLike[str]] | None = None) -> Rollout:
     """N variants of one scenario structure with the stack they name (all the same); the
     built-in ADS through :func:`rocas.ads.run.simulate_batch`. Returns the fields the
-    searches read (times, ego, actors, min_gap, outcomes)."""
+    searches read (times, ego, actors, min_gap, outcomes).
+
+    ``outputs`` (row -> MCAP file) also records those rows, each the file :func:`simulate`
+    with ``output`` writes for it alone: the built-in ADS records them inside the batch (one
+    batch's fixed per-tick cost for all), any other stack runs each again alone."""
     stacks = {s.ego.stack for s in scenarios}
     if len(stacks) != 1:
         raise UsageError(f"one batch mixes stacks {sorted(stacks)}",
@@ -181,9 +186,11 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
         from rocas.ads.run import simulate_batch as simulate_batch_ads
 
         r = simulate_batch_ads(list(scenarios), params=[dict(p) for p in params],
-                               seeds=list(seeds))
+                               seeds=list(seeds), outputs=outputs)
         return Rollout(times=r.times, ego=r.ego, actors=r.actors, min_gap=r.min_gap,
                        outcomes=r.outcomes, digests={}, actor_ids=r.actor_ids)
+    for i, path in sorted((outputs or {}).items()):
+        simulate(scenarios[i], params[i], seeds[i], output=path)
     from rocas.stacks.external import external_for
     from rocas.stacks.registry import get_stack
 

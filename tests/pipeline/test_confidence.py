@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 from rocas.pipeline.confidence import agreement, alternate_references, level, note
 
 
@@ -239,3 +241,41 @@ def test_the_walk_goes_on_past_the_window_only_to_the_module_substitution_names(
                             (None, found)):
         assert _answer(answer, opinion, lambda: unread)["module"] == answer["deviating_module"]
     assert unread.asked == []
+
+
+def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_share_a_batch(
+        tmp_path, monkeypatch):
+    """Module substitution needs only the accident, so it is started (on a worker, here in
+    this process) before phase II and the confidence phase takes its result; the alternate
+    references are recorded in one batch, each the file its run alone writes."""
+    import rocas.pipeline.substitution as substitution
+    from rocas.pipeline import AnalyzeConfig, analyze
+    from rocas.pipeline.physical import apply_physical
+    from rocas.scenarios import load_example
+    from rocas.search import SerialExecutor
+    from rocas.search.space import Mutation
+    from rocas.stacks.rollout import simulate
+
+    events = []
+    real = substitution.second_opinion
+
+    def counted(*args, **kwargs):
+        events.append("substitution")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(substitution, "second_opinion", counted)
+    red_truck = load_example("roundabout_red_truck")
+    cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=0, batch_size=8)
+    out = tmp_path / "run"
+    report = analyze(red_truck, out, cfg, executor=SerialExecutor(),
+                     progress=lambda phase, info: events.append(phase))
+    assert events.count("substitution") == 1
+    assert events.index("substitution") < events.index("physical")
+    confidence = json.loads((out / "state.json").read_text())["done"]["confidence"]
+    assert confidence["second_opinion"]["stance"] == report["confidence"]["second_opinion"]["stance"]
+    alternates = confidence["answers"][1:]
+    assert alternates  # the red truck's accident has other references
+    for answer in alternates:
+        scn = apply_physical(red_truck, Mutation(dict(answer["mutation"])))
+        simulate(scn, output=tmp_path / "alone.mcap")
+        assert (out / answer["reference"]).read_bytes() == (tmp_path / "alone.mcap").read_bytes()

@@ -127,6 +127,16 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
     assert counts[:4] == [(0, 89), (8, 89), (16, 89), (24, 89)]  # the bar advances slice by slice
     assert counts[-1] == (total, total)  # and ends at what was run
 
+    # fixed.mcap is recorded by phase V as an extra row of its first batch: the file the fix's
+    # run alone writes; a resumed run whose recording is missing records it again
+    from rocas.ads.run import simulate
+
+    fix = json.loads((out / "cyber.json").read_text())["fix"]
+    simulate(red_truck, fix, output=tmp_path / "fixed_alone.mcap")
+    assert (out / "fixed.mcap").read_bytes() == (tmp_path / "fixed_alone.mcap").read_bytes()
+    assert (whole_dir / "fixed.mcap").read_bytes() == (tmp_path / "fixed_alone.mcap").read_bytes()
+    (out / "fixed.mcap").unlink()
+
     # resumed with other slices (the results do not depend on them), from the 17th simulation
     import rocas.pipeline.validation as validation
 
@@ -140,6 +150,7 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
         {k: v for k, v in whole.items() if k not in ("timings_s", "settings")}
     assert json.loads((out / "validation.json").read_text()) == whole["validation"]
     assert not (out / "validation.ckpt").exists()
+    assert (out / "fixed.mcap").read_bytes() == (tmp_path / "fixed_alone.mcap").read_bytes()
 
 
 def _full_sweep_pick(fixed, rates):

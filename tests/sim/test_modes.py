@@ -119,3 +119,21 @@ def test_a_variant_is_the_same_beside_variants_whose_paths_are_longer_or_shorter
         assert np.array_equal(together.ego[i], alone.ego[0])
         assert np.array_equal(together.actors[i], alone.actors[0])
         assert np.array_equal(together.digests[i], alone.digests[0])
+
+
+def test_rows_recorded_inside_a_batch_are_the_files_of_their_runs_alone(short, recorded, tmp_path):
+    """Recordings merged into one batch (simulate_batch's ``outputs``) cost one rollout's fixed
+    per-tick cost instead of one each, and change no bit of any file or row."""
+    _, alone = recorded  # short, recorded on its own with its own seed
+    other = tmp_path / "alone_other.mcap"
+    simulate(short, {"planning.yield_distance_m": 1.0}, seed=7, output=other)
+    variants = [dataclasses.replace(short, seed=99), short, short, short]
+    params = [None, {"planning.yield_distance_m": 1.0}, None, {"planning.yield_distance_m": 2.0}]
+    seeds = [99, 7, short.seed, 3]
+    outputs = {1: tmp_path / "row1.mcap", 2: tmp_path / "row2.mcap"}
+    batch = simulate_batch(variants, params=params, seeds=seeds, outputs=outputs)
+    assert outputs[1].read_bytes() == other.read_bytes()
+    assert outputs[2].read_bytes() == alone.read_bytes()
+    plain = simulate_batch(variants, params=params, seeds=seeds)  # recording moves nothing
+    assert np.array_equal(batch.ego, plain.ego) and np.array_equal(batch.actors, plain.actors)
+    assert batch.outcomes == plain.outcomes
