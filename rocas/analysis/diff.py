@@ -146,15 +146,16 @@ class DiffResult:
         return find_initial_module(self.cmg, t_star, self.control_channel, self.delta_s,
                                    control_onset_s=self.control_onset_s, bin_s=self.bin_s)
 
-    def walk_past_window(self, written_by: Collection[str]) -> PinpointResult:
+    def walk_past_window(self, written_by: Collection[str], reach_s: float | None = None
+                         ) -> PinpointResult:
         """Algorithm 1's walk continued from an input of the module it named that a module of
-        ``written_by`` writes and that departed before the window
-        (:func:`~rocas.analysis.pinpoint.past_the_window`); Algorithm 1's own result when
-        there is none."""
+        ``written_by`` writes and that departed before the window (at most ``reach_s`` before
+        the module, when given; :func:`~rocas.analysis.pinpoint.past_the_window`); Algorithm
+        1's own result when there is none."""
         if self.pinpoint.deviating_module is None:
             return self.pinpoint
         t_star = {c.topic: c.change_point_s for c in self.channels}
-        return past_the_window(self.cmg, t_star, self.pinpoint, self.delta_s, written_by)
+        return past_the_window(self.cmg, t_star, self.pinpoint, self.delta_s, written_by, reach_s)
 
     @property
     def complete(self) -> bool:

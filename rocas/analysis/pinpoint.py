@@ -249,13 +249,15 @@ def find_initial_module(
 
 def past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float | None],
                     found: PinpointResult, delta_s: float,
-                    written_by: Collection[str] | None = None) -> PinpointResult:
+                    written_by: Collection[str] | None = None,
+                    reach_s: float | None = None) -> PinpointResult:
     """The walk that named a module, continued past the window.
 
     Naming a module says only that none of its inputs departed within ``delta_s`` before its
     own change point. When one departed earlier, the module was not the first to deviate: the
     walk goes on from the latest such input (then by name; only inputs that a module of
-    ``written_by`` writes, when given), with the window again, and
+    ``written_by`` writes, when given, and only those that departed at most ``reach_s`` before
+    the module, when given), with the window again, and
     :attr:`PinpointResult.fallback` says so. Algorithm 1 takes this step by itself only for
     the control channel's own writer (the commands' writer deviates only through its inputs);
     deeper in the graph the window keeps its role (an early harmless departure upstream of a
@@ -269,7 +271,8 @@ def past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float 
     assert t_writer is not None
     early = [(t, c) for c in cmg.channels_read_by(writer)
              if (t := channel_t_star.get(c)) is not None and t < t_writer - delta_s
-             and (written_by is None or set(cmg.writers_of(c)) & set(written_by))]
+             and (written_by is None or set(cmg.writers_of(c)) & set(written_by))
+             and (reach_s is None or t >= t_writer - reach_s)]
     if not early:
         return found
     t_in, channel = min(early, key=lambda tc: (-tc[0], tc[1]))

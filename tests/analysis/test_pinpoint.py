@@ -260,6 +260,12 @@ def test_a_walk_goes_on_past_a_named_modules_window_only_when_asked_and_from_who
     assert "no input of planning departed within 3 s before planning departed (7 s)" in p.fallback
     # from any input: the latest, the prediction, whose own window reaches the obstacles
     assert past_the_window(cmg, t, r, 3.0).deviating_module == "perception"
+    # only inputs that departed at most reach_s before planning (7 s): the obstacles (3.5 s)
+    # are 3.5 s before, within 4 s; the prediction (3.8 s) too, the chassis (1.5 s) not
+    assert past_the_window(cmg, t, r, 3.0, written_by=["perception"], reach_s=4.0) \
+        .deviating_module == "perception"
+    assert past_the_window(cmg, t, r, 3.0, written_by=["perception"], reach_s=3.4) is r
+    assert past_the_window(cmg, t, r, 3.0, written_by=["canbus"], reach_s=4.0) is r
     # the chassis departed earlier too (1.5 s): from canbus's input the walk names canbus
     assert past_the_window(cmg, t, r, 3.0, written_by=["canbus"]).deviating_module == "canbus"
     # no input written by the module asked for, or none before the window: unchanged

@@ -137,7 +137,9 @@ class _Walks:
         path = ("/control", "control", "/planning", "planning") if module == "planning" else ()
         return SimpleNamespace(deviating_module=module, path=path, fallback=None)
 
-    def walk_past_window(self, written_by):
+    delta_s = 3.0
+
+    def walk_past_window(self, written_by, reach_s=None):
         from types import SimpleNamespace
 
         return SimpleNamespace(deviating_module=None, path=(), fallback=None)
@@ -202,14 +204,16 @@ def test_an_abstaining_chosen_reference_gives_way_to_one_that_names_a_module():
 class _Window:
     """A stand-in for DiffResult whose walk past the window names ``module``."""
 
+    delta_s = 3.0
+
     def __init__(self, module):
         self.module = module
         self.asked = []
 
-    def walk_past_window(self, written_by):
+    def walk_past_window(self, written_by, reach_s=None):
         from types import SimpleNamespace
 
-        self.asked.append(tuple(written_by))
+        self.asked.append((tuple(written_by), reach_s))
         return SimpleNamespace(deviating_module=self.module,
                                path=("/control", "control", "/planning", "planning",
                                      "/perception/brake_signal", "perception"),
@@ -227,7 +231,7 @@ def test_the_walk_goes_on_past_the_window_only_to_the_module_substitution_names(
     sub = _Opinion(module="perception", perception="agrees")
     window = _Window("perception")
     taken = _answer(found, sub, lambda: window)
-    assert taken["module"] == "perception" and window.asked == [("perception",)]
+    assert taken["module"] == "perception" and window.asked == [(("perception",), 6.0)]
     assert taken["window_passed"].endswith("so the walk goes on from it; module substitution "
                                            "names perception")
     # the walk past the window reaches another module than substitution's: unchanged
