@@ -25,6 +25,7 @@ among the modules the commands depend on, not on a walk back from the commands' 
 
 from __future__ import annotations
 
+import functools
 import json
 import shutil
 import time
@@ -250,6 +251,7 @@ def _answer(found: dict[str, Any], opinion: Any, result: Callable[[], DiffResult
             or opinion.stance(entries["deviating_module"]) not in _SUPPORTS):
         answer = {"module": entries["deviating_module"], "path": entries["path"],
                   "fallback": entries["fallback"], "entries_passed": entries["channels"]}
+    result = None if result is None else functools.cache(result)  # one diff, read at most once
     return _past_cleared(answer, opinion, result) if "entries_passed" in answer else \
         _past_window(_past_cleared(answer, opinion, result), opinion, result)
 
