@@ -51,3 +51,14 @@ def test_third_party_diff_shows_the_walk_in_the_cmg_view(tmp_path):
     img = _image(cmg.png)
     # the walk's dots and labels in orange, the deviating module in red: both on screen
     assert _share(img, ORANGE) > 0.0005 and _share(img, RED) > 0.00003
+
+
+def test_a_stopped_viewer_leaves_no_process_behind():
+    psutil = pytest.importorskip("psutil")
+    from rocas.viz.screenshot import headless_viewer
+
+    with headless_viewer() as viewer:
+        # the environment's `rerun` script and the viewer binary it starts
+        family = [psutil.Process(viewer.proc.pid), *psutil.Process(viewer.proc.pid).children(recursive=True)]
+    gone, alive = psutil.wait_procs(family, timeout=5)
+    assert not alive, [p.cmdline()[:2] for p in alive]
