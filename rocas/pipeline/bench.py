@@ -20,12 +20,15 @@ from rocas.pipeline.analyze import analyze
 from rocas.pipeline.config import AnalyzeConfig
 
 
-def _expected(truth: Any) -> dict[str, Any]:
+def _expected(truth: Any, replayed: bool = True) -> dict[str, Any]:
+    """What the ground truth expects of an analysis; ``replayed``: the analysis replays a
+    recording, whose actors are known by the ids a replay gives them (``truth.replayed_id``),
+    rather than simulating the scenario, whose actors keep their own ids."""
     return {"verdict": "misconfiguration" if truth.fixable else "no_configuration_fix",
             "deviating_module": truth.module, "parameters": list(truth.parameters),
             "fixes": [dict(f) for f in truth.fixes],
             "trigger_entity": truth.trigger_entity, "trigger_property": truth.trigger_property,
-            "trigger_replayed": truth.replayed_id}
+            "trigger_replayed": truth.replayed_id if replayed else truth.trigger_entity}
 
 
 def _found(report: dict[str, Any]) -> dict[str, Any]:
@@ -147,7 +150,7 @@ def run_bench(
         # the phases' own times, which a resumed run keeps (its wall time would be the resume's)
         seconds = sum(report["timings_s"].values())
         reports[e.key] = report
-        exp, fnd = _expected(e.truth), _found(report)
+        exp, fnd = _expected(e.truth, replayed=rec is not None), _found(report)
         marks = score(exp, fnd)
         rows.append({"id": e.key.split("_", 1)[0], "type": e.id, "title": e.truth.title,
                      "expected": exp, "found": fnd, "marks": marks, "hit": marks["hit"],
@@ -195,7 +198,7 @@ def run_bench(
                 progress(f"{e.id}: instance {k + 1}/{len(inst.instances)}")
                 rep = analyze(scenario, out / "instances" / f"{e.key}_{seed}", cfg,
                               resume=(out / "instances" / f"{e.key}_{seed}" / "state.json").exists())
-                hits += score(_expected(e.truth), _found(rep))["hit"]
+                hits += score(_expected(e.truth, replayed=False), _found(rep))["hit"]
             per_type.append({"type": e.id, "tried": inst.tried, "crashed": inst.crashed,
                              "fixable": e.truth.fixable, "fix_holds": inst.fix_holds,
                              "analyzed": len(inst.instances), "hits": hits,

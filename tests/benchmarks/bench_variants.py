@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists())
         wall = time.perf_counter() - t0
-        exp, fnd = _expected(v.truth), _found(report)
+        exp, fnd = _expected(v.truth, replayed=not args.from_scenario), _found(report)
         marks = score(exp, fnd)
         row = {"name": v.key, "type": v.truth.id, "family": _family(v.key), "hit": marks["hit"],
                "marks": marks, "expected": exp, "found": fnd, "trigger": _trigger(report),

@@ -122,3 +122,17 @@ def test_the_trigger_is_scored_when_the_replayed_id_is_known():
     assert other["trigger"] is False and not other["hit"]
     unknown = score({**exp, "trigger_replayed": None}, {**found, "trigger_entity": "obstacle_2"})
     assert unknown["trigger"] is None and unknown["hit"]
+
+
+def test_a_simulated_entry_expects_the_scenarios_own_trigger_id():
+    """Without its recording an entry is simulated from its scenario, whose actors keep their
+    ids: the lav catalog's red truck is `red_truck` there and `obstacle_1` in a replay."""
+    from types import SimpleNamespace
+
+    from rocas.pipeline.bench import _expected
+
+    truth = SimpleNamespace(fixable=True, module="brake", parameters=("brake.brake_threshold",),
+                            fixes=({"brake.brake_threshold": 0.8},), trigger_entity="red_truck",
+                            trigger_property="color", replayed_id="obstacle_1")
+    assert _expected(truth)["trigger_replayed"] == "obstacle_1"
+    assert _expected(truth, replayed=False)["trigger_replayed"] == "red_truck"
