@@ -313,6 +313,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         robust_text,
         settings_text,
         sweep_text,
+        walk_named_text,
     )
 
     con = env.out()
@@ -333,7 +334,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         for p in trig["properties"]:
             t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
-        t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path'])}")
+        t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path']) or '-'}")
         if report.get("walk_fallback"):
             t.add_row("", f"({report['walk_fallback']})")
         if report.get("entries_passed"):
@@ -342,6 +343,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
             t.add_row("", f"({cleared_passed_text(report)})")
         if report.get("window_passed"):
             t.add_row("", f"({report['window_passed']})")
+        if report.get("walk_named"):
+            t.add_row("", f"({walk_named_text(report)})")
     if report.get("confidence"):
         t.add_row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:

@@ -124,6 +124,7 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
     phase_confidence(run)  # may adopt the references' majority: read the diff's summary after it
     diff = run.state["done"]["diff"]
     cyber = phase_cyber(run, diff["deviating_module"])
+    diff = run.state["done"]["diff"]  # the second suspect's module when its fix is reported
     if "fix" not in cyber:
         return write_report(run.out, build_report(run.state, run.accident, "no_configuration_fix"))
     if not run.done("validation"):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,9 +22,69 @@ from rocas.search.space import Mutation
 
 
 def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
+    """Search ``module``'s parameters (every module's with ``--scope all``) for the smallest
+    fix, then, when none fixes the accident, the parameters of the module module substitution
+    names (:func:`second_suspect`). Returns the phase's result (``fix`` and
+    ``misconfiguration`` when one was found; ``named_module`` when the fix is the second
+    suspect's, whose module then becomes the analysis's deviating module)."""
     if run.done("cyber"):
         return run.state["done"]["cyber"]
     t0 = time.perf_counter()
+    result, evaluations = _search_fix(run, module, run.out / "cyber.ckpt")
+    suspect = second_suspect(run, module)
+    if "fix" not in result and suspect is not None:
+        second, more = _search_fix(run, suspect, run.out / "cyber_suspect.ckpt")
+        evaluations += more
+        first = {k: result[k] for k in ("module", "parameters", "evaluations", "feasible")}
+        if "fix" in second:
+            result = {**second, "named_module": module, "named_module_search": first}
+            _report_suspect(run, module, suspect)
+        else:
+            result["second_suspect"] = {k: second[k] for k in ("module", "parameters", "evaluations",
+                                                                 "feasible")}
+    write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=jsonable))
+    run.finish("cyber", result, time.perf_counter() - t0, evaluations)
+    return result
+
+
+def second_suspect(run: Run, module: str | None) -> str | None:
+    """The module whose parameters are searched when no configuration of ``module`` avoids the
+    accident: the module module substitution names (its ground truth alone avoids the
+    accident), when that is another module and the search was over one module (``--scope
+    module``); else None.
+
+    Algorithm 1's module can be the wrong one in a way only the fix search shows: a creeping
+    car whose forecast differs from its first message in the reference has no change point,
+    and the walk ends at planning (a T-junction variant of A1). No planning parameter avoids
+    the accident; substitution says ground-truth prediction does, and prediction's
+    still-obstacle speed is the repair. Accidents no configuration can avoid (A7's car from
+    behind, A8's hedge) have no such module: substitution avoids nothing there."""
+    opinion = ((run.state["done"].get("confidence") or {}).get("second_opinion") or {})
+    suspect = opinion.get("module")
+    if (module is None or run.cfg.scope != "module" or not opinion.get("accident")
+            or suspect in (None, module)):
+        return None
+    return suspect
+
+
+def _report_suspect(run: Run, named: str, suspect: str) -> None:
+    """Make ``suspect`` the analysis's deviating module (the diff phase's summary) and say so in
+    the confidence phase's result: the reference's walk did not reach it, so the answer is
+    at most contested (substitution supports it, the references do not)."""
+    done = run.state["done"]
+    diff = done["diff"]
+    done["diff"] = {**diff, "deviating_module": suspect, "path": [], "walk_named": named}
+    conf = done.get("confidence")
+    if conf:
+        conf["level"] = "contested"
+        conf["note"] = (conf["note"].rstrip(".") + f"; no configuration of {named} avoids the "
+                        f"accident, so the parameters of {suspect}, the module substitution "
+                        f"names, were searched and its fix is reported (at most contested).")
+
+
+def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[str, Any], int]:
+    """The cyber search over ``module``'s parameters and the minimisation of its fixes:
+    the result (``fix`` and ``misconfiguration`` when one was found) and the simulations run."""
     scn, orig = run.scenario, run.original
     assert scn is not None and orig is not None
     space = run.cyber_space(module)
@@ -60,7 +121,7 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     # a fix among the screened single parameters ends the search there: the fix is then chosen
     # from what every seed screens alike (the genetic search runs only when none is a fix)
     res = run_search(space, batch, search, 2,
-                     checkpoint=run.out / "cyber.ckpt",
+                     checkpoint=checkpoint,
                      on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")),
                      screening_suffices=lambda cands: any(c.feasible and c.objectives[0] <= limit
                                                           for c in cands))
@@ -131,10 +192,8 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
                                    "misconfiguration": described(smalls[i])} for i in near]
         # fixed.mcap (the accident with the fix) is recorded by phase V, as an extra row of its
         # first batch (rocas.pipeline.validation.record_fix)
-    write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=jsonable))
-    run.finish("cyber", result, time.perf_counter() - t0, evaluations)
-    (run.out / "cyber.ckpt").unlink(missing_ok=True)
-    return result
+    checkpoint.unlink(missing_ok=True)
+    return result, evaluations
 
 
 #: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter

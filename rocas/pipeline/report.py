@@ -72,6 +72,9 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "cleared_passed": diff.get("cleared_passed"),
         # why the walk went on past Algorithm 1's window toward the module substitution names
         "window_passed": diff.get("window_passed"),
+        # the module Algorithm 1's walk named when no configuration of it avoided the accident
+        # and the fix was found in the module module substitution names
+        "walk_named": diff.get("walk_named"),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -118,6 +121,13 @@ def entries_passed_text(report: dict[str, Any]) -> str:
 
     return (entries_text(report["entries_passed"], report["deviating_module"])
             + "; module substitution disagrees with the module named at those departures")
+
+
+def walk_named_text(report: dict[str, Any]) -> str:
+    """Why the deviating module is not the one Algorithm 1's walk named (one clause)."""
+    return (f"Algorithm 1's walk named {report['walk_named']}, but no configuration of it avoids "
+            f"the accident; module substitution names {report['deviating_module']}, whose "
+            "parameters hold the fix")
 
 
 def cleared_passed_text(report: dict[str, Any]) -> str:
@@ -278,6 +288,8 @@ def markdown(report: dict[str, Any]) -> str:
             lines.append(f"  - {cleared_passed_text(report)}.")
         if report.get("window_passed"):
             lines.append(f"  - {report['window_passed']}.")
+        if report.get("walk_named"):
+            lines.append(f"  - {walk_named_text(report)}.")
     if report.get("confidence"):
         lines.append(f"- **Confidence**: {confidence_text(report)}")
     for m in report["misconfiguration"]:
