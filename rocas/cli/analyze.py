@@ -334,7 +334,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         for p in trig["properties"]:
             t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
-        t.add_row("deviating module", f"{report['deviating_module']}   walk: {' -> '.join(report['path']) or '-'}")
+        walk = " -> ".join(report["path"]) or "-"
+        t.add_row("deviating module", f"{report['deviating_module']}   walk: {walk}")
         if report.get("walk_fallback"):
             t.add_row("", f"({report['walk_fallback']})")
         if report.get("entries_passed"):

@@ -18,6 +18,13 @@ EXPLANATIONS = {
         "{module_or_none}, but no configuration of {scope} within the search budget avoids it without "
         "changing the ego's earlier trajectory. This points to a missing feature or a limit of the "
         "system rather than a misconfiguration."),
+    # the fix was found in the module module substitution names (cyber_phase.second_suspect)
+    "misconfiguration_second_suspect": (
+        "Changing {entity_phrase} avoids the accident, and the two executions first diverge in "
+        "module {walk_named}, but no configuration of it avoids the accident; with ground truth "
+        "from module {module} it does not happen, and changing {params} in that module avoids it "
+        "while the ego drives as before until {horizon:.1f} s: the accident is attributed to this "
+        "configuration."),
     "no_reference": (
         "No small change of the world within the search budget avoids the accident, so there is no "
         "accident-free reference execution to compare with; the analysis stops here. A larger "
@@ -101,10 +108,16 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     if verdict == "not_reproduced" and _nothing_recorded(replay, accident):
         report["explanation"] = NO_ACCIDENT[replay.get("source", "recording")]
         return report
-    report["explanation"] = EXPLANATIONS[verdict].format(
+    suspect = cyber.get("second_suspect", {}).get("module")
+    scope = f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS"
+    if suspect:
+        scope += f" nor of module {suspect} (the module module substitution names)"
+    template = ("misconfiguration_second_suspect"
+                if verdict == "misconfiguration" and diff.get("walk_named") else verdict)
+    report["explanation"] = EXPLANATIONS[template].format(
         entity_phrase=entity_phrase, module=module, module_or_none=module or "(none found)",
-        params=params or "-", horizon=max(horizon, 0.0),
-        scope=f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS")
+        params=params or "-", horizon=max(horizon, 0.0), scope=scope,
+        walk_named=diff.get("walk_named"))
     nearest = cyber.get("nearest_fix")
     if verdict == "no_configuration_fix" and nearest:
         changes = ", ".join(f"{k} to {_fmt(v)}" for k, v in nearest["mutation"].items())

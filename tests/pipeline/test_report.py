@@ -87,3 +87,24 @@ def test_the_replay_line_says_when_only_the_emergency_before_the_collision_came_
     assert replay_text(report).startswith(
         "the emergency before the recorded collision with obstacle_1 at 7.55 s reproduced "
         "(emergency at 6.75 s), not the collision: the analysis explains the emergency")
+
+
+def test_a_fix_in_the_second_suspect_says_which_module_the_walk_named():
+    state = _state({"reproduced": True, "ego_rmse_m": 0.01})
+    state["done"] |= {
+        "diff": {"deviating_module": "prediction", "path": [], "walk_named": "planning"},
+        "cyber": {"scope": "module", "parameters": 18, "named_module": "planning",
+                  "fix": {"prediction.still_obstacle_speed_mps": 0.2},
+                  "misconfiguration": [{"module": "prediction",
+                                        "parameter": "prediction.still_obstacle_speed_mps",
+                                        "original": 0.5, "mutated": 0.2}]}}
+    report = build_report(state, None, "misconfiguration")
+    assert report["deviating_module"] == "prediction" and report["walk_named"] == "planning"
+    assert "first diverge in module planning, but no configuration of it" in report["explanation"]
+    assert "Algorithm 1's walk named planning" in markdown(report)
+    # searched and not found either: the explanation names both modules
+    state["done"]["diff"] = {"deviating_module": "planning", "path": ["/control", "control"]}
+    state["done"]["cyber"] = {"scope": "module", "parameters": 42,
+                              "second_suspect": {"module": "prediction", "parameters": 18}}
+    report = build_report(state, None, "no_configuration_fix")
+    assert "module planning nor of module prediction" in report["explanation"]
