@@ -136,15 +136,9 @@ class DiffResult:
         point after content entered both runs, as :attr:`entries` walks. The channels' change
         points are the diff's; nothing is read again."""
         quiet = {c for m in modules for c in self.cmg.channels_written_by(m)} - {self.control_channel}
-
-        def t(c: ChannelDiff) -> float | None:
-            if past_entries and c.after_entry is not None:
-                return c.after_entry.first_s
-            return c.change_point_s
-
-        t_star = {c.topic: (None if c.topic in quiet else t(c)) for c in self.channels}
-        return find_initial_module(self.cmg, t_star, self.control_channel, self.delta_s,
-                                   control_onset_s=self.control_onset_s, bin_s=self.bin_s)
+        return find_initial_module(self.cmg, self._t_star(quiet, past_entries), self.control_channel,
+                                   self.delta_s, control_onset_s=self.control_onset_s,
+                                   bin_s=self.bin_s)
 
     def walk_past_window(self, written_by: Collection[str], reach_s: float | None = None
                          ) -> PinpointResult:
@@ -154,8 +148,19 @@ class DiffResult:
         1's own result when there is none."""
         if self.pinpoint.deviating_module is None:
             return self.pinpoint
-        t_star = {c.topic: c.change_point_s for c in self.channels}
-        return past_the_window(self.cmg, t_star, self.pinpoint, self.delta_s, written_by, reach_s)
+        return past_the_window(self.cmg, self._t_star(), self.pinpoint, self.delta_s, written_by,
+                               reach_s)
+
+    def _t_star(self, quiet: Collection[str] = (), past_entries: bool = False
+                ) -> dict[str, float | None]:
+        """Each channel's first change point [s] (after content entered both runs, with
+        ``past_entries``), None for the channels of ``quiet``."""
+        def t(c: ChannelDiff) -> float | None:
+            if past_entries and c.after_entry is not None:
+                return c.after_entry.first_s
+            return c.change_point_s
+
+        return {c.topic: (None if c.topic in quiet else t(c)) for c in self.channels}
 
     @property
     def complete(self) -> bool:
