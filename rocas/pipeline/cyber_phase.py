@@ -211,10 +211,13 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
     h2, in order: the same margin expressed in another parameter, or a second suspect.
 
     The smallest fix (h2, ties by parameter names) is chosen, unless another fix within
-    ``tolerance`` of it keeps the ego farther from everything (``separation``: the run's
-    smallest gap to any actor or object [m], 0.5 m more or better): such changes are
-    equally small, and the one that adds margin is the repair, not the one that avoids the
-    accident narrowly (an overtake margin lowered until the ego races ahead of the truck).
+    ``tolerance`` of it keeps the ego clearly farther from everything (``separation``: the
+    run's smallest gap to any actor or object [m]; SEPARATION_MARGIN_M more and
+    SEPARATION_RATIO times as much): such changes are equally small, and the one that adds
+    margin is the repair, not the one that avoids the accident narrowly (an overtake margin
+    lowered until the ego races ahead of the truck: 3.9 m against 6.9 m). Two fixes that
+    both pass at several metres (an A11 speed variant: the moving-obstacle check 0.5 -> 1.83 m
+    keeps 6.0 m, the lateral buffer 0.3 -> 1.69 m 6.8 m) both add margin; the smaller stays.
     A fix that leaves the ego less than SCRAPE_M from anything ranks after every fix that
     does not, whatever its h2: the collision became a scrape, nothing was repaired (an A11
     variant: `idm_exponent` 4 -> 6.4, h2 1.34, passes the truck at 6 cm; the collision
@@ -238,7 +241,8 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
     if separation is not None:
         widest = max((i for i in close if stall(i) <= stall(best)),
                      key=lambda i: (separation[i], -h2[i]))
-        if separation[widest] >= separation[best] + SEPARATION_MARGIN_M:
+        if separation[widest] >= max(separation[best] + SEPARATION_MARGIN_M,
+                                     separation[best] * SEPARATION_RATIO):
             best = widest
 
     def kind(m: Mutation) -> Any:
@@ -255,6 +259,10 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
 
 #: how much wider [m] an equally small fix must keep the ego's smallest gap to be preferred
 SEPARATION_MARGIN_M = 0.5
+#: and how many times as wide: a race won narrowly against a repair keeps a clearly smaller gap
+#: (catalog A3 and its variants: 3.9 against 6.9 m, 4.5 against 7.0 m, ratios 1.56-1.77), two
+#: margins raised alike keep similar gaps (an A11 variant: 6.0 and 6.8 m, ratio 1.14)
+SEPARATION_RATIO = 1.25
 #: a fix that leaves the ego closer than this [m] to any actor or object is a scrape (the
 #: catalog's chosen fixes keep 0.43 m or more: A2's passes a parked car at 0.43 m)
 SCRAPE_M = 0.25

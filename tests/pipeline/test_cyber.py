@@ -130,6 +130,25 @@ def test_an_equally_small_fix_that_keeps_the_ego_farther_away_wins():
                                originals=originals)[0]] == race
 
 
+def test_two_fixes_that_both_pass_at_several_metres_keep_the_smaller():
+    """An A11 speed variant (s613): the moving-obstacle check 0.5 -> 1.83 m (h2 1.443) keeps
+    6.0 m from the truck, the lateral buffer 0.3 -> 1.69 m (h2 1.464) 6.8 m: both raise a
+    margin, neither races; 0.8 m wider is only 14 % more, so the smaller change stays."""
+    from rocas.pipeline.cyber_phase import SEPARATION_RATIO, _smallest_fix
+
+    check = Mutation({"planning.collision_check_moving_m": 1.828})
+    buffer = Mutation({"planning.lateral_safety_buffer_m": 1.692})
+    fixes = [buffer, check]
+    originals = {"planning.collision_check_moving_m": 0.5, "planning.lateral_safety_buffer_m": 0.3}
+    best, near = _smallest_fix([1.464, 1.443], fixes, separation=[6.82, 6.00],
+                               originals=originals)
+    assert fixes[best] == check and [fixes[i] for i in near] == [buffer]
+    # the same two gaps scaled down to a race (1.0 m against 1.82 m) swap
+    wide = 1.0 * SEPARATION_RATIO + 0.6
+    assert fixes[_smallest_fix([1.464, 1.443], fixes, separation=[wide, 1.0],
+                               originals=originals)[0]] == buffer
+
+
 def test_a_fix_is_known_only_when_its_whole_batch_has_run():
     from rocas.pipeline.cyber_phase import _first_fix, _first_fix_batch
     from rocas.search.ga import Candidate, GenerationStats, SearchResult
