@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -118,19 +118,31 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
 
     originals = {v.name: float(v.original) for v in space.variables}
     limit = run.cfg.h1_limit_m2
+
+    def stalls(m: Mutation) -> bool:
+        # (a search resumed from its checkpoint has no path lengths for its earlier
+        # generations: those count as getting past, as before this rule)
+        return blocked and m in driven and driven[m] < accident_driven + PROGRESS_MARGIN_M
+
     # a fix among the screened single parameters ends the search there: the fix is then chosen
-    # from what every seed screens alike (the genetic search runs only when none is a fix)
+    # from what every seed screens alike (the genetic search runs only when none is a fix).
+    # A screened fix that leaves the ego standing where the accident left it is no repair, and
+    # the screening tries only the ends of each range: when every screened fix stalls, the
+    # genetic search looks inside the ranges too (an A2 actors variant: the static buffer
+    # 0.6 -> 0 m brakes hard later in the run, 0.1-0.3 m takes the ego through the gap)
     res = run_search(space, batch, search, 2,
                      checkpoint=checkpoint,
                      on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")),
-                     screening_suffices=lambda cands: any(c.feasible and c.objectives[0] <= limit
-                                                          for c in cands))
+                     screening_suffices=lambda cands: any(
+                         c.feasible and c.objectives[0] <= limit and not stalls(c.mutation)
+                         for c in cands))
     result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
                               "generations": [gen_json(g, "h2") for g in res.generations],
                               "evaluations": res.evaluations, "feasible": len(res.feasible),
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
-    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals)
+    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals,
+                                 stalled=stalls if blocked else None)
     if search.screen and all(c.generation == 0 for c in res.candidates):
         # the screening decided: a screened fix sits at an end of its parameter's range, so its
         # size says nothing about which way that parameter gives the smaller fix; the other
@@ -166,7 +178,7 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
             batch(unseen)
         # with an accident that left the ego standing, a fix that drives it no farther only
         # softened the stop (ranked after the fixes that get it past)
-        stalled = [blocked and driven[m] < accident_driven + PROGRESS_MARGIN_M for m in smalls]
+        stalled = [stalls(m) for m in smalls]
         best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
                                    separation=[separation[m] for m in smalls],
                                    originals=originals, stalled=stalled)
@@ -315,16 +327,28 @@ def _first_fix_batch(res: SearchResult, h1_limit: float) -> int | None:
 
 
 def _fix_candidates(res: SearchResult, h1_limit: float, count: int,
-                    originals: Mapping[str, float] | None = None) -> list[Candidate]:
+                    originals: Mapping[str, float] | None = None,
+                    stalled: Callable[[Mutation], bool] | None = None) -> list[Candidate]:
     """The best ``count`` feasible fixes with distinct parameter sets or directions (up or
     down from ``originals``): those that keep the ego's earlier trajectory (h1 <= limit), by
     smallest change (h2). None when no fix keeps it: a configuration that avoids the accident
-    only by driving differently before it is not a fix (:func:`_nearest_fix` records it)."""
+    only by driving differently before it is not a fix (:func:`_nearest_fix` records it).
+
+    Fixes ``stalled`` marks (the ego stays standing where the accident left it) come after
+    every other: :func:`_smallest_fix` ranks them last, so they would only take the places of
+    fixes that get the ego past (an A2 actors variant: the headway, the nudge's largest offset
+    and its look-ahead, all three a gentle stop in front of the parked pair, took the three
+    places and the static buffer that takes the ego through the gap was never shrunk)."""
     originals = originals or {}
     keep = [c for c in res.feasible if c.objectives[0] <= h1_limit]
     out: list[Candidate] = []
     seen: set[tuple[tuple[str, int], ...]] = set()
-    for c in sorted(keep, key=lambda c: (c.objectives[1], c.objectives[0], c.mutation.names)):
+
+    def stall(c: Candidate) -> bool:
+        return stalled is not None and stalled(c.mutation)
+
+    for c in sorted(keep, key=lambda c: (stall(c), c.objectives[1], c.objectives[0],
+                                         c.mutation.names)):
         key = _direction(c.mutation, originals)
         if key not in seen:
             seen.add(key)

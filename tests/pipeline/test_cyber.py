@@ -91,6 +91,8 @@ def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory
     both = SearchResult(candidates=[a1, a2, b, down], front=[])
     assert _fix_candidates(both, 1.0, 3) == [a2, b]  # without originals: one per set
     assert _fix_candidates(both, 1.0, 3, {"planning.a": 1.5, "planning.b": 0.0}) == [a2, down, b]
+    # fixes that leave the ego standing come after those that get it past, whatever their h2
+    assert _fix_candidates(res, 1.0, 2, stalled=lambda m: "planning.a" in m.values) == [b, a2]
 
 
 def test_the_smallest_shrunk_fix_wins_and_near_ones_through_other_parameters_are_kept():

@@ -161,6 +161,34 @@ def test_a_screening_that_suffices_ends_the_search_with_the_same_result_at_every
     assert max(c.generation for c in run(0, lambda cands: False).candidates) > 0
 
 
+def test_halfway_screening_finds_a_fix_inside_a_range_that_its_ends_overshoot():
+    """A fix only between the original and an end (here the truck between 4 and 8 m/s, its
+    original 12 m/s, its range 0-20): the ends alone miss it (0 m/s 'brakes hard elsewhere'),
+    halfway to the low end (6 m/s) finds it, before any generation and at every seed."""
+    from rocas.search.ga import screening_genomes
+
+    def simulate(m):
+        objectives, _ = search_toy.simulate(m)
+        v = float(m.values.get("truck.speed", 12.0))
+        return objectives, (-1.0 if 4.0 <= v < 8.0 else 1.0)
+
+    halfway = [SPACE.decode(g) for g in screening_genomes(SPACE, 0, halfway=True)]
+    # real variables only (the enum and the bool have no halfway), each towards both ends
+    assert {n for m in halfway for n in m.names} == {"truck.speed", "car.speed", "car.x",
+                                                     "weather.fog", "ped.speed"}
+    assert Mutation({"truck.speed": 6.0}) in halfway
+    assert Mutation({"truck.speed": 16.0}) in halfway
+    results = []
+    for seed in (0, 1):
+        cfg = SearchConfig(population=8, generations=3, seed=seed, screen=True)
+        res = run_search(SPACE, lambda ms: [simulate(m) for m in ms], cfg, n_objectives=2,
+                         screening_suffices=lambda cands: any(c.feasible for c in cands))
+        assert all(c.generation == 0 for c in res.candidates)
+        assert [c.mutation for c in res.feasible] == [Mutation({"truck.speed": 6.0})]
+        results.append(frozenset((c.mutation, c.objectives) for c in res.candidates))
+    assert results[0] == results[1]
+
+
 def test_executor_registry():
     assert make_executor("serial").name == "serial"
     with pytest.raises(UsageError, match="unknown executor"):
