@@ -40,7 +40,8 @@ class AnalyzeConfig:
         shrink_candidates: how many of the search's best fixes (distinct parameter sets or
             directions of change) are shrunk before one is chosen (see _smallest_fix).
         screening: start the cyber search by trying every parameter alone at both ends of its
-            range (two simulations per parameter, out of the budget); False runs a plain
+            range and halfway to each (up to four simulations per parameter, out of the
+            budget); False runs a plain
             genetic search (the paper has no screening) from a population half single-parameter
             mutants, half random.
         alternate_references: how many other accident-free references (changing other
@@ -109,12 +110,13 @@ class AnalyzeConfig:
 
         The budget rule (see :func:`planned_simulations`): stage 1 runs budget // population
         generations. Stage 2 with screening first tries each of its ``n_vars`` parameters
-        alone at both ends of its range (two simulations per parameter, out of the budget),
-        then runs (budget - 2 n_vars) // population generations, but at least 2: the first
+        alone at both ends of its range and halfway to each (up to four simulations per
+        parameter, out of the budget), then runs (budget - 4 n_vars) // population
+        generations, but at least 2: the first
         generation is the best screened mutants, already simulated, so at least one generation
         of new mutants always runs, even when the screening alone uses up the budget."""
         screen = stage == 2 and self.screening
-        generations = (max(2, (self.budget - 2 * n_vars) // self.population) if screen
+        generations = (max(2, (self.budget - 4 * n_vars) // self.population) if screen
                        else self.budget // self.population)
         return SearchConfig(population=self.population, generations=generations,
                             seed=self.seed * 1000 + stage,
@@ -134,8 +136,9 @@ def planned_simulations(search: SearchConfig, screening: int = 0) -> int:
 
 
 def screening_simulations(space: MutationSpace, seed: int) -> int:
-    """How many simulations the screening of ``space`` runs: two per parameter, less an end
-    of a range that is the parameter's value in force (no change, nothing to simulate)."""
+    """How many simulations the screening of ``space`` runs: up to four per parameter (two for
+    a bool or an enum), less a value that is the parameter's value in force (an end of its
+    range, or a halfway point of an integer: no change, nothing to simulate)."""
     from rocas.search.ga import screening_genomes
 
     return len({m for m in (space.decode(g) for g in screening_genomes(space, seed)) if m.values})

@@ -149,9 +149,9 @@ def run_search(
     """Run NSGA-II over ``space``; resumes from ``checkpoint`` when it exists.
 
     Identical mutations are evaluated once (results are cached per search). With
-    ``cfg.screen``, each variable is first tried alone at both ends of its range and, unless
-    that suffices, halfway from its original to each end (:func:`screening_genomes`);
-    ``screening_suffices(candidates)`` may end the search after either screening:
+    ``cfg.screen``, each variable is first tried alone at both ends of its range and halfway
+    from its original to each end (:func:`screening_genomes`), and
+    ``screening_suffices(candidates)`` may end the search after the screening:
     what the screening found does not depend on the seed (its order does, its results do not),
     so a caller that chooses among the screened candidates gets the same answer at every seed.
     """
@@ -170,12 +170,6 @@ def run_search(
     sampling = _initial_population(space, cfg)
     if cfg.screen:
         sampling = _screen(space, evaluate, cfg, state, on_generation)
-        if screening_suffices is not None and screening_suffices(state.candidates):
-            return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
-        # the ends of a range can overshoot a fix that lies inside it (a buffer that helps at
-        # 0.1-0.3 m brakes hard elsewhere at 0): halfway from each original to each end next,
-        # still the same for every seed, before the genetic search
-        sampling = _screen(space, evaluate, cfg, state, on_generation, halfway=True)
         if screening_suffices is not None and screening_suffices(state.candidates):
             return SearchResult(state.candidates, pareto_front(state.candidates), state.generations)
     algorithm = NSGA2(pop_size=cfg.population, sampling=sampling, eliminate_duplicates=True,
@@ -277,44 +271,41 @@ def _candidate(c: dict[str, Any], names: set[str]) -> Candidate:
     return Candidate(Mutation(values), objectives, constraint, int(c["generation"]))
 
 
-def screening_genomes(space: MutationSpace, seed: int, halfway: bool = False) -> np.ndarray:
-    """Two genomes per variable, each mutating that variable alone to one end of its range,
-    variables in a seeded random order; shape (2 * n_vars, n_genes). With ``halfway``, the
-    values halfway from the variable's original to each end instead, for real and integer
-    variables only (a bool's or an enum's ends are all its values); shape (2 * n_numeric,
-    n_genes)."""
+def screening_genomes(space: MutationSpace, seed: int) -> np.ndarray:
+    """Single-variable genomes, variables in a seeded random order: each variable alone at
+    both ends of its range and, for real and integer variables, halfway from its original
+    value to each end (a bool's or an enum's ends are all its values); shape (n, n_genes),
+    n <= 4 * n_vars. The ends can overshoot a fix that lies inside a range (a buffer that
+    repairs at 0.1-0.3 m brakes hard elsewhere at 0 m)."""
     base = space.encode(Mutation())
     order = np.random.default_rng(seed).permutation(len(space.variables))
     out = []
     for i in order:
         var = space.variables[i]
-        if halfway and var.kind not in ("real", "int"):
-            continue
         u0 = var.encode(var.original)
-        for end in (0.0, 1.0):
+        values = (0.0, 1.0) + (((u0 + 0.0) / 2.0, (u0 + 1.0) / 2.0)
+                               if var.kind in ("real", "int") else ())
+        for u in values:
             g = base.copy()
-            g[2 * i], g[2 * i + 1] = 0.75, (u0 + end) / 2.0 if halfway else end
+            g[2 * i], g[2 * i + 1] = 0.75, u
             out.append(g)
     return np.array(out).reshape(len(out), space.n_genes)
 
 
 def _screen(space: MutationSpace, evaluate: BatchEvaluate, cfg: SearchConfig, state: _State,
-            on_generation: Callable[[GenerationStats], None] | None,
-            halfway: bool = False) -> np.ndarray:
+            on_generation: Callable[[GenerationStats], None] | None) -> np.ndarray:
     """Simulate the screening genomes (:func:`screening_genomes`; candidates of generation 0)
-    and return the first population of the genetic search: the best screened so far."""
-    genomes = screening_genomes(space, cfg.seed, halfway)
+    and return the first population of the genetic search: the best screened."""
+    genomes = screening_genomes(space, cfg.seed)
     mutations = [space.decode(g) for g in genomes]
-    wanted = set(mutations)
     todo = list(dict.fromkeys(m for m in mutations if m.values and m not in state.cache))
     for m, ev in zip(todo, evaluate(todo), strict=True):
         state.cache[m] = ev
         state.candidates.append(Candidate(m, tuple(ev[0]), float(ev[1]), 0))
     screened = [c for c in state.candidates if c.generation == 0]
-    this = [c for c in screened if c.mutation in wanted]
-    if this:
-        f = np.array([c.objectives for c in this], dtype=float)
-        g = np.array([c.constraint for c in this], dtype=float)
+    if screened:
+        f = np.array([c.objectives for c in screened], dtype=float)
+        g = np.array([c.constraint for c in screened], dtype=float)
         stats = GenerationStats(0, len(screened), int((g <= 0).sum()), float(g.min()), f, g)
         state.generations.append(stats)
         if on_generation is not None and state.replayed == 0:

@@ -125,9 +125,9 @@ def test_without_screening_the_cyber_search_starts_at_its_first_generation(red_t
     plain = json.loads((out / "cyber.json").read_text())["generations"]
     first = json.loads((screened / "cyber.json").read_text())["generations"][0]
     # screening is generation 0: each parameter of the module alone at the ends of its range
-    # (an end that is the parameter's current value is not simulated)
+    # and halfway to each (a value that is the parameter's current one is not simulated)
     n = json.loads((screened / "cyber.json").read_text())["parameters"]
-    assert first["generation"] == 0 and n < first["evaluations"] <= 2 * n
+    assert first["generation"] == 0 and 2 * n < first["evaluations"] <= 4 * n
     assert plain[0]["generation"] == 1 and plain[0]["evaluations"] <= CFG.population
 
 
@@ -291,9 +291,10 @@ def test_the_budget_rule_and_the_planned_simulations():
     from rocas.pipeline.config import planned_simulations
 
     default = AnalyzeConfig()
-    # the defaults as before: 7 cyber generations after a 36-parameter screening
-    assert default.search(2, 36).generations == 7 and default.search(1).generations == 10
-    assert planned_simulations(default.search(2, 36), 63) == 63 + 6 * 24 <= default.budget
+    # the defaults: 4 cyber generations after a 36-parameter screening (up to 4 x 36 = 144
+    # simulations; perception's screening runs 125)
+    assert default.search(2, 36).generations == 4 and default.search(1).generations == 10
+    assert planned_simulations(default.search(2, 36), 125) == 125 + 3 * 24 <= default.budget
     assert planned_simulations(default.search(1)) == 240
     # a screening that uses up the budget is still followed by a generation of new mutants
     small = AnalyzeConfig(budget=48, population=12)

@@ -54,13 +54,14 @@ def test_pace_limits_may_only_fall():
     assert PACE_LIMITS <= set(PARAMETERS) and not PACE_LIMITS & (BRAKING_LIMITS | SENSING_LIMITS)
     faster = Mutation({"planning.junction_speed_mps": 12.0})
     assert not space.decode(space.encode(faster)).values  # raising is not in the space
-    # the screening tries a pace limit at its lower end only (its upper end is the value in force)
+    # the screening tries a pace limit at its lower end and halfway down only (its upper end is
+    # the value in force)
     from rocas.search.ga import screening_genomes
 
     screened = [m.values["planning.junction_speed_mps"] for m in
                 (space.decode(g) for g in screening_genomes(space, 0))
                 if "planning.junction_speed_mps" in m.values]
-    assert screened == [junction.low]
+    assert screened == [junction.low, (junction.low + 9.0) / 2]
 
 
 def test_fix_candidates_are_the_smallest_distinct_fixes_that_keep_the_trajectory():
