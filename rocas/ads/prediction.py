@@ -189,10 +189,12 @@ class Prediction:
         pos = clip(road.lane_point_s[q][..., None] + dist_k, 0, cmax - 1e-6)
         i = pos.astype(np.int64)
         u = pos - i
-        li = lane[..., None]
-        p0 = road.chain_points[li, i]  # (N, S, K, 2)
-        p1 = road.chain_points[li, i + 1]
-        lf_h = road.chain_heading[li, i]
+        # flat gathers (``take`` of rows is several times faster than ``chain_points[li, i]``)
+        k = lane[..., None] * road.chain_points.shape[1] + i
+        chain = road.chain_points.reshape(-1, 2)
+        p0 = np.take(chain, k, axis=0)  # (N, S, K, 2)
+        p1 = np.take(chain, k + 1, axis=0)
+        lf_h = road.chain_heading.reshape(-1).take(k)
         offx = x - road.lane_points[q, 0]
         offy = y - road.lane_points[q, 1]
         lat0 = -offx * np.sin(lane_h) + offy * np.cos(lane_h)

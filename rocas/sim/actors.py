@@ -182,7 +182,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], st.grip, dt)
     # project vehicles back on their path (local window)
     cand = clip(state.index[..., None] + PROJECTION_WINDOW, 0, st.last_index)
-    pts = world.actor_path.reshape(-1, 2)[st.path_rows + cand]  # (N, A, W, 2)
+    pts = np.take(world.actor_path.reshape(-1, 2), st.path_rows + cand, axis=0)  # (N, A, W, 2)
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
     v_idx = cand[st.rows, st.cols, best]

@@ -114,8 +114,8 @@ def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndar
     # several times as much on a large batch
     k = path_rows(path) + i
     flat = path.reshape(-1, 2)
-    p0 = flat[k]
-    p1 = flat[k + 1]
+    p0 = np.take(flat, k, axis=0)
+    p1 = np.take(flat, k + 1, axis=0)
     return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
             heading.reshape(-1)[k])
 

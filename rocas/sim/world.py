@@ -454,7 +454,7 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     last = road.ref_points.shape[0] - 1
     far = idx > last
     idx = np.minimum(idx, last)
-    row = road.ref_table[idx]
+    row = np.take(road.ref_table, idx, axis=0)
     rx, ry, c, s = row[..., 0], row[..., 1], row[..., 6], row[..., 7]
     dx, dy = x - rx, y - ry
     lateral = -dx * s + dy * c
@@ -469,6 +469,6 @@ def reference_at(road: RoadGeometry, s: np.ndarray
     f = clip(s / REF_SPACING_M, 0.0, r - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    row = road.ref_table[i]
+    row = np.take(road.ref_table, i, axis=0)
     x0, y0 = row[..., 0], row[..., 1]
     return (x0 + u * (row[..., 4] - x0), y0 + u * (row[..., 5] - y0), row[..., 2], row[..., 3])
