@@ -16,7 +16,7 @@ from rocas import numerics
 from rocas.ads import classifier
 from rocas.ads.localization import LocalizationOutput
 from rocas.sim import rng
-from rocas.sim.geometry import clip, segments_blocked, wrap_angle
+from rocas.sim.geometry import clip, segments_blocked_by_edge, wrap_angle
 from rocas.sim.world import (
     KIND_BOX,
     KIND_CONE,
@@ -157,14 +157,14 @@ class Perception:
         return factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0), glare, factor
 
     def _edge_opacity(self) -> np.ndarray:
-        """(N, 1, 1, E) how much each area edge hides what is behind it (0 for an area a variant
+        """(E, N, 1, 1) how much each area edge hides what is behind it (0 for an area a variant
         disabled); fixed for a run, computed once."""
         if self._opacity is None:
             w = self.world
             enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
             opacity = np.where(self.edge_weight_kind == 0, 1.0,
                                self.p["vegetation_opacity"][:, None])  # (N, E)
-            self._opacity = np.where(enabled, opacity, 0.0)[:, None, None, :]
+            self._opacity = np.ascontiguousarray(np.where(enabled, opacity, 0.0).T)[..., None, None]
         return self._opacity
 
     def _visibility(self, ex: np.ndarray, ey: np.ndarray, gt: ObstacleFrame) -> np.ndarray:
@@ -176,9 +176,11 @@ class Perception:
         hl = gt.length / 2
         px = np.stack([gt.x, gt.x + hl * c, gt.x - hl * c], -1)  # (N, M, 3)
         py = np.stack([gt.y, gt.y + hl * s, gt.y - hl * s], -1)
-        crosses = segments_blocked(ex[:, None, None], ey[:, None, None], px, py, w.area_edges)
-        block = np.where(crosses, self._edge_opacity(), 0.0)
-        return (1.0 - block.max(axis=-1)).mean(axis=-1)
+        # (E, N, M, 3): the edges first, so that the largest opacity is a fast outer reduction
+        crosses = segments_blocked_by_edge(ex[:, None, None], ey[:, None, None], px, py,
+                                           w.area_edges)
+        block = np.maximum.reduce(np.where(crosses, self._edge_opacity(), 0.0), axis=0)
+        return (1.0 - block).mean(axis=-1)
 
     # -- the step -----------------------------------------------------------------------------
     def step(self, tick: int, ego_x: np.ndarray, ego_y: np.ndarray, ego_yaw: np.ndarray,

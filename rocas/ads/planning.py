@@ -203,6 +203,14 @@ class Planning:
         # forecasts against the path (only slots that move in some variant are projected)
         mov = not_behind & ~pred.is_static
         cols = np.flatnonzero(mov.any(axis=0))
+        # forecast points no variant checks (past its forecast's or its overlap horizon)
+        # cannot overlap: only the leading points up to the last one some variant checks are
+        # projected, the others would be masked out
+        checks_k = pred.traj_valid & (pred.traj_t <= p["overlap_check_horizon_s"][:, None])
+        live_k = np.flatnonzero(checks_k.any(axis=0))
+        if live_k.size == 0:
+            cols = live_k
+        kk = int(live_k[-1]) + 1 if live_k.size else 0
         any_over = np.zeros((n, m), dtype=bool)
         body_over = np.zeros((n, m), dtype=bool)
         k_in = np.zeros((n, m), dtype=np.int64)
@@ -210,20 +218,21 @@ class Planning:
         s_hi = np.full((n, m), -np.inf)
         if cols.size:
             sub = (slice(None), cols)
-            _, sk, lk = project_on_reference(road, pred.traj_x[sub], pred.traj_y[sub])
+            subk = (slice(None), cols, slice(0, kk))
+            _, sk, lk = project_on_reference(road, pred.traj_x[subk], pred.traj_y[subk])
             ref_hk = road.ref_heading[road.ref_index(sk)]
-            head_k = np.where(tangent, pred.traj_heading[sub], pred.heading[sub][..., None])
+            head_k = np.where(tangent, pred.traj_heading[subk], pred.heading[sub][..., None])
             rel_k = head_k - ref_hk
             ca, sa = np.abs(np.cos(rel_k)), np.abs(np.sin(rel_k))
             hw_s, hl_s = hw_o[sub][..., None], hl_o[sub][..., None]
             lat_k = hw_s * ca + hl_s * sa
             lon_k = hl_s * ca + hw_s * sa
-            tk = pred.traj_t[:, None, :]
+            tk = pred.traj_t[:, None, :kk]
             # distance of each forecast point from the ego's path and the bodies' half widths,
             # shared by the buffered overlap and the body overlap below
             dist_k = np.abs(lk - offset_at(sk))
             half_k = hw_e + lat_k
-            over = (mov[sub][..., None] & pred.traj_valid[:, None, :]
+            over = (mov[sub][..., None] & pred.traj_valid[:, None, :kk]
                     & (tk <= p["overlap_check_horizon_s"][:, None, None])
                     & (dist_k < half_k + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
                     & (sk + lon_k > (s0 - hl_e)[:, None, None]))
@@ -346,16 +355,21 @@ class Planning:
         tp = np.concatenate([np.zeros((n, 1)), pred.traj_t], axis=1)  # (N, Kp + 1)
         tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
             tp <= c("collision_check_horizon_s")) & (tp <= p["trajectory_horizon_s"][:, None])
+        # only the leading times up to the last one some variant checks (now is always
+        # checked): the others' gaps would be masked out
+        kc = int(np.flatnonzero(tcheck.any(axis=0))[-1]) + 1
+        tp, tcheck = tp[:, :kc], tcheck[:, :kc]
         ex, ey, eh, es = self._sample(traj, t, tp)
         # only slots some variant considers are checked (the others' gaps would be discarded)
         checked = consider | mov
         cols = np.flatnonzero(checked.any(axis=0))
         if cols.size:
             sub = (slice(None), cols)
-            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[sub]], axis=-1)
-            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[sub]], axis=-1)
+            subk = (slice(None), cols, slice(0, kc - 1))
+            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[subk]], axis=-1)
+            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[subk]], axis=-1)
             oh = np.where(tangent, np.concatenate([head_now[sub][..., None],
-                                                   pred.traj_heading[sub]], -1),
+                                                   pred.traj_heading[subk]], -1),
                           pred.heading[sub][..., None])
             gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
                           ox, oy, oh, hl_o[sub][..., None], hw_o[sub][..., None])
