@@ -167,6 +167,9 @@ def test_small_arrays_get_the_bits_of_the_array_path():
             got = numerics.arctan2(np.array([yy]), np.array([xx]))
             want = numerics.arctan2(np.full(17, yy), np.full(17, xx))[:1]
             assert got.view(np.int64)[0] == want.view(np.int64)[0], (yy, xx)
+    zeros = np.tile([0.0, -0.0], 20)  # planning keeps arctan(+-0.0) = +-0.0 without a call
+    for z in (zeros, zeros[:2]):
+        assert np.array_equal(numerics.arctan(z).view(np.int64), z.view(np.int64))
     assert type(numerics.exp(0.5)) is np.float64 and numerics.arctan2(np.ones((2, 3)), 1.0).shape == (2, 3)
 
 

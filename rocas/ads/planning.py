@@ -454,7 +454,15 @@ class Planning:
         x = rx - d * np.sin(rh)
         y = ry + d * np.cos(rh)
         dd = _row_gradient(d) / np.maximum(_row_gradient(s), 1e-3)
-        th = wrap_angle(rh + numerics.arctan(dd))
+        # most of a path runs along the reference (no offset, dd == +-0.0, about 60 % of the
+        # points): arctan(+-0.0) is +-0.0, so only the other points go through arctan
+        turn = dd != 0.0
+        if turn.all():
+            atan = numerics.arctan(dd)
+        else:
+            atan = dd.copy()
+            atan[turn] = numerics.arctan(dd[turn])
+        th = wrap_angle(rh + atan)
         return x, y, th, rk, s, v, acc
 
 
