@@ -115,6 +115,7 @@ class _Statics:
     path_rows: np.ndarray   # (N, A, 1) first sample of each path in the flattened paths
     last: np.ndarray        # (N, A) highest sample position a path is read at
     last_index: np.ndarray  # (N, A, 1) index of each path's last own sample
+    knots_sorted: bool      # every speed profile's knot times are nondecreasing
 
 
 _STATICS: weakref.WeakKeyDictionary[BatchWorld, _Statics] = weakref.WeakKeyDictionary()
@@ -137,7 +138,8 @@ def _statics(world: BatchWorld) -> _Statics:
             rows=np.arange(n)[:, None], cols=np.arange(a)[None, :],
             path_rows=path_rows(world.actor_path)[..., None],
             last=world.actor_path_count - 1.000001,
-            last_index=(world.actor_path_count - 1)[..., None])
+            last_index=(world.actor_path_count - 1)[..., None],
+            knots_sorted=bool((np.diff(world.actor_profile_t, axis=-1) >= 0.0).all()))
         _STATICS[world] = got
     return got
 
@@ -152,7 +154,7 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     if a == 0:
         return state
     st = _statics(world)
-    v_target = profile_speed(t, world.actor_profile_t, world.actor_profile_v)
+    v_target = profile_speed(t, world.actor_profile_t, world.actor_profile_v, st.knots_sorted)
     accel = clip(SPEED_GAIN_PER_S * (v_target - b.speed), -ACTOR_DECEL_MPS2, ACTOR_ACCEL_MPS2)
     # reactive actors keep a distance to the ego and to other actors ahead
     ox = np.concatenate([b.x, ego.x[:, None]], 1)
@@ -174,10 +176,14 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     idm = ACTOR_ACCEL_MPS2 * (1 - (sstar / np.maximum(g, 0.1)) ** 2)
     accel = np.where(world.actor_reactive & np.isfinite(g),
                      np.maximum(np.minimum(accel, idm), -ACTOR_DECEL_MPS2), accel)
-    # vehicles: pure pursuit through the bicycle model
+    # vehicles: pure pursuit through the bicycle model; points move along the path: both
+    # read their paths in one call (elementwise, so each value is what its own call gives)
     ds = st.ds
-    tx, ty, _ = path_point(world.actor_path, world.actor_path_heading, ds,
-                           state.s + pursuit_lookahead(fa.speed), st.last)
+    v_pt = np.maximum(fa.speed + accel * dt, 0.0)
+    s_pt = state.s + 0.5 * (b.speed + v_pt) * dt
+    (tx, px2), (ty, py2), (_, ph2) = path_point(
+        world.actor_path, world.actor_path_heading, ds,
+        np.stack([state.s + pursuit_lookahead(fa.speed), s_pt]), st.last)
     kappa = pursuit_curvature(fa.x, fa.y, fa.yaw, tx, ty)
     veh, _ = bicycle_step(fa, accel, kappa, friction[:, None], st.grip, dt)
     # project vehicles back on their path (local window)
@@ -186,10 +192,6 @@ def step_actors(world: BatchWorld, state: ActorState, t: float, ego: VehicleStat
     best = np.argmin((pts[..., 0] - veh.x[..., None]) ** 2 + (pts[..., 1] - veh.y[..., None]) ** 2,
                      axis=-1)
     v_idx = cand[st.rows, st.cols, best]
-    # points: move along the path
-    v_pt = np.maximum(fa.speed + accel * dt, 0.0)
-    s_pt = state.s + 0.5 * (b.speed + v_pt) * dt
-    px2, py2, ph2 = path_point(world.actor_path, world.actor_path_heading, ds, s_pt, st.last)
     is_veh = st.is_veh
     guide = VehicleState(
         x=np.where(is_veh, veh.x, px2), y=np.where(is_veh, veh.y, py2),
