@@ -22,6 +22,8 @@ input, as numpy does).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["arctan", "arctan2", "exp", "log", "log_positive", "power", "rowdot", "sigmoid", "tan", "tanh"]
@@ -65,9 +67,70 @@ def _out(result: np.ndarray, scalar: bool) -> np.ndarray:
     return result[()] if scalar else result
 
 
+# Small arrays (a batch of one: a few obstacles, one ego) go through the same formulas one
+# element at a time in Python floats: each step is the same IEEE 754 double operation
+# (+ - * /, comparisons, abs, copysign, frexp, ldexp; ``round`` rounds half to even as
+# ``np.rint`` does), so the bits are those of the array path (tests/test_numerics.py compares
+# them), at a fraction of the cost of some forty numpy calls on a few elements. Arguments
+# that need a special case (non-finite, out of range) take the array path.
+_SMALL = 16
+
+
+def _small(xa: np.ndarray) -> list[float] | None:
+    """The elements of a small array as Python floats, or None (use the array path)."""
+    if 0 < xa.size <= _SMALL:
+        vals = xa.ravel().tolist()
+        for v in vals:
+            if not math.isfinite(v):
+                return None
+        return vals
+    return None
+
+
+def _from_small(vals: list[float], xa: np.ndarray) -> np.ndarray:
+    """Scalar results back into the shape (and scalar-ness) of ``xa``."""
+    out = np.array(vals, dtype=np.float64).reshape(xa.shape)
+    return out[()] if xa.ndim == 0 else out
+
+
+def _exp_scalar(x: float) -> float:
+    """exp's arithmetic on one float with |x| <= _EXP_PLAIN."""
+    k = float(round(x * _INV_LN2))
+    hi = x - k * _LN2_HI
+    lo = k * _LN2_LO
+    r = hi - lo
+    t = r * r
+    p = _EXP_P
+    c = r - t * (p[0] + t * (p[1] + t * (p[2] + t * (p[3] + t * p[4]))))
+    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
+    return math.ldexp(y, int(k))
+
+
+def _log_scalar(x: float) -> float:
+    """_log_core's arithmetic on one positive finite float."""
+    m, e = math.frexp(x)
+    big = m < 0.5 * _SQRT2
+    if big:
+        m = 2.0 * m
+    k = float(e - 1 if big else e)
+    f = m - 1.0
+    s = f / (2.0 + f)
+    z = s * s
+    w = z * z
+    g = _LOG_LG
+    t1 = w * (g[1] + w * (g[3] + w * g[5]))
+    t2 = z * (g[0] + w * (g[2] + w * (g[4] + w * g[6])))
+    r = t2 + t1
+    hfsq = 0.5 * f * f
+    return k * _LN2_HI - ((hfsq - (s * (hfsq + r) + k * _LN2_LO)) - f)
+
+
 def exp(x: np.ndarray | float) -> np.ndarray:
     """e**x, elementwise. Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
+    vals = _small(xa)
+    if vals is not None and max(map(abs, vals)) <= _EXP_PLAIN:
+        return _from_small([_exp_scalar(v) for v in vals], xa)
     scalar = xa.ndim == 0
     # one reduction tells whether any argument needs the special cases (NaN fails the test);
     # without them the result is the same arithmetic minus five passes over the array
@@ -98,6 +161,9 @@ def sigmoid(x: np.ndarray | float) -> np.ndarray:
 def log(x: np.ndarray | float) -> np.ndarray:
     """Natural logarithm, elementwise (``-inf`` at 0, NaN below). Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
+    vals = _small(xa)
+    if vals is not None and min(vals) > 0.0:
+        return _from_small([_log_scalar(v) for v in vals], xa)
     scalar = xa.ndim == 0
     # all arguments positive and finite (NaN fails both tests): no special cases to mask
     plain = xa.size == 0 or bool((_min(xa, axis=None) > 0.0) & (_max(xa, axis=None) < np.inf))
@@ -114,6 +180,9 @@ def log(x: np.ndarray | float) -> np.ndarray:
 def log_positive(x: np.ndarray) -> np.ndarray:
     """:func:`log` of a float64 array whose every element the caller knows to be positive and
     finite (the same arithmetic without the test for special cases). Shape: as ``x``."""
+    vals = _small(x)
+    if vals is not None:
+        return _from_small([_log_scalar(v) for v in vals], x)
     return _log_core(x)
 
 
@@ -160,9 +229,39 @@ def _arctan_unit(t: np.ndarray) -> np.ndarray:
     return _ATAN_EIGHTHS_HI[i] + ((u + u * q) + _ATAN_EIGHTHS_LO[i])
 
 
+def _arctan_unit_scalar(t: float) -> float:
+    """_arctan_unit's arithmetic on one float in [0, 1]."""
+    k = min(float(round(t * 8.0)), 8.0)
+    c = k * 0.125
+    u = (t - c) / (1.0 + c * t)
+    z = u * u
+    q = z * (-1.0 / 3 + z * (1.0 / 5 + z * (-1.0 / 7 + z * (1.0 / 9 + z * (-1.0 / 11 + z / 13)))))
+    i = int(k)
+    return _ATAN_HI_LIST[i] + ((u + u * q) + _ATAN_LO_LIST[i])
+
+
+_ATAN_HI_LIST = _ATAN_EIGHTHS_HI.tolist()
+_ATAN_LO_LIST = _ATAN_EIGHTHS_LO.tolist()
+
+
+def _arctan2_scalar(y: float, x: float) -> float:
+    """arctan2's arithmetic on one finite pair."""
+    ay, ax = abs(y), abs(x)
+    den = ax if ax >= ay else ay
+    a = _arctan_unit_scalar((ax if ax <= ay else ay) / (den if den >= _TINY else _TINY))
+    if ay > ax:
+        a = _PI_2_HI - (a - _PI_2_LO)
+    if math.copysign(1.0, x) < 0.0:
+        a = _PI_HI - (a - _PI_LO)
+    return math.copysign(a, y)
+
+
 def arctan(x: np.ndarray | float) -> np.ndarray:
     """Arc tangent in [-pi/2, pi/2], elementwise. Shape: as ``x``."""
     xa = np.asarray(x, dtype=np.float64)
+    vals = _small(xa)
+    if vals is not None:
+        return _from_small([_arctan_scalar(v) for v in vals], xa)
     scalar = xa.ndim == 0
     ax = np.abs(xa)
     a = _arctan_unit(np.minimum(ax, 1.0 / np.maximum(ax, _TINY)))  # atan(1/x) = pi/2 - atan(x)
@@ -170,11 +269,26 @@ def arctan(x: np.ndarray | float) -> np.ndarray:
     return _out(np.copysign(a, xa), scalar)
 
 
+def _arctan_scalar(x: float) -> float:
+    """arctan's arithmetic on one finite float."""
+    ax = abs(x)
+    inv = 1.0 / (ax if ax >= _TINY else _TINY)
+    a = _arctan_unit_scalar(ax if ax <= inv else inv)
+    if ax > 1.0:
+        a = _PI_2_HI - (a - _PI_2_LO)
+    return math.copysign(a, x)
+
+
 def arctan2(y: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
     """Angle of the point (x, y) in [-pi, pi], elementwise, with C's signed-zero conventions
     (both infinite: not handled). Shapes broadcast."""
     ya = np.asarray(y, dtype=np.float64)
     xa = np.asarray(x, dtype=np.float64)
+    if ya.shape == xa.shape:
+        yv = _small(ya)
+        xv = _small(xa) if yv is not None else None
+        if xv is not None:
+            return _from_small([_arctan2_scalar(b, a) for b, a in zip(yv, xv, strict=True)], ya)
     scalar = ya.ndim == 0 and xa.ndim == 0
     ay, ax = np.abs(ya), np.abs(xa)
     den = np.maximum(ax, ay)
@@ -196,6 +310,13 @@ def tanh(x: np.ndarray | float) -> np.ndarray:
     Absolute error below 2e-16 (relative error grows for |x| < 1e-8, where tanh(x) ~ x).
     """
     xa = np.asarray(x, dtype=np.float64)
+    vals = _small(xa)
+    if vals is not None:
+        out = []
+        for v in vals:
+            e = _exp_scalar(2.0 * min(abs(v), 40.0))
+            out.append(math.copysign(1.0 - 2.0 / (e + 1.0), v))
+        return _from_small(out, xa)
     scalar = xa.ndim == 0
     ax = np.minimum(np.abs(xa), 40.0)  # tanh(40) == 1.0 in float64
     out = 1.0 - 2.0 / (exp(2.0 * ax) + 1.0)

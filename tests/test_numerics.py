@@ -134,6 +134,45 @@ def test_rowdot_skips_all_zero_features_without_changing_a_bit():
             assert np.isnan(numerics.rowdot(x, w_inf)[:, 0]).all()
 
 
+def _in_small_calls(f, *args: np.ndarray) -> np.ndarray:
+    """f over arrays of at most 16 elements (numerics' scalar path), concatenated."""
+    n = args[0].size
+    return np.concatenate([np.atleast_1d(f(*(a[i:i + 16] for a in args)))
+                           for i in range(0, n, 16)])
+
+
+def test_small_arrays_get_the_bits_of_the_array_path():
+    # numerics evaluates arrays of at most 16 finite elements one float at a time in Python;
+    # every element must get the bits the array path gives it
+    eighths = np.arange(0, 17) / 16.0  # arctan's table boundaries (ties of t * 8)
+    special = np.array([0.0, -0.0, 1.0, -1.0, 0.5, 1e-310, -1e-310, 40.0, -40.0, 708.0, -708.0,
+                        np.pi, 1e300, -1e300])
+    x = np.concatenate([WIDE, RNG.uniform(-12, 12, 6000), eighths, -eighths, 1 / eighths[1:],
+                        special])
+    y = np.concatenate([RNG.uniform(-50, 50, WIDE.size), RNG.normal(size=6000), eighths[::-1],
+                        eighths, -eighths[1:], special[::-1]])
+    e = np.clip(x, -708.0, 708.0)
+    pos = np.abs(x) + 1e-300
+    cases = [(numerics.exp, (e,)), (numerics.log, (pos,)), (numerics.log_positive, (pos,)),
+             (numerics.arctan, (x,)), (numerics.arctan2, (y, x)), (numerics.arctan2, (x, y)),
+             (numerics.tanh, (x,)), (numerics.sigmoid, (np.clip(x, -700, 700),)),
+             (numerics.power, (pos[:3000], np.abs(y[:3000]) % 8))]
+    for f, args in cases:
+        whole = np.asarray(f(*args))
+        assert whole.size > 16
+        small = _in_small_calls(f, *args)
+        assert np.array_equal(whole.view(np.int64), small.view(np.int64)), f.__name__
+    for yy in (0.0, -0.0, 1.0, -1.0):
+        for xx in (0.0, -0.0, 1.0, -1.0):
+            got = numerics.arctan2(np.array([yy]), np.array([xx]))
+            want = numerics.arctan2(np.full(17, yy), np.full(17, xx))[:1]
+            assert got.view(np.int64)[0] == want.view(np.int64)[0], (yy, xx)
+    zeros = np.tile([0.0, -0.0], 20)  # planning keeps arctan(+-0.0) = +-0.0 without a call
+    for z in (zeros, zeros[:2]):
+        assert np.array_equal(numerics.arctan(z).view(np.int64), z.view(np.int64))
+    assert type(numerics.exp(0.5)) is np.float64 and numerics.arctan2(np.ones((2, 3)), 1.0).shape == (2, 3)
+
+
 def test_scalars_stay_scalars():
     assert np.ndim(numerics.exp(1.0)) == 0 and np.ndim(numerics.arctan2(1.0, 2.0)) == 0
 

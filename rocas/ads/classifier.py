@@ -84,7 +84,8 @@ def camera_view(
         best = np.argmax(value, axis=1)  # (N, C) nearest-looking object per column
         rows = np.arange(n)[:, None]  # gathers of the chosen object (as take_along_axis)
         col_size = value[rows, best, np.arange(CAMERA_COLUMNS)]
-        col_rgb = rgb[rows, best] * col_size[..., None]
+        col_rgb = np.take(rgb.reshape(-1, 3), rows * rgb.shape[1] + best, axis=0) \
+            * col_size[..., None]
     col_rgb = clip(col_rgb + glare[:, None, None], 0.0, 1.0)
     return np.concatenate([col_size[..., None], col_rgb], axis=-1).reshape(n, FEATURES)
 

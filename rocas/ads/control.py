@@ -10,7 +10,7 @@ import numpy as np
 from rocas import numerics
 from rocas.ads.localization import ChassisOutput, LocalizationOutput
 from rocas.ads.planning import PlanningOutput
-from rocas.sim.geometry import clip, wrap_angle
+from rocas.sim.geometry import _arange, clip, wrap_angle
 from rocas.sim.world import BatchWorld
 
 
@@ -34,10 +34,13 @@ class ControlOutput:
 
 def _interp_rows(xq: np.ndarray, xp: np.ndarray, *fps: np.ndarray) -> list[np.ndarray]:
     """Row-wise linear interpolation of several tables: xq (N,), xp and each fp (N, K), xp
-    increasing per row."""
+    nondecreasing per row."""
     k = xp.shape[1]
-    i = clip((xp <= xq[:, None]).sum(axis=1) - 1, 0, k - 2)
-    r = np.arange(xp.shape[0])
+    # xp <= xq holds on a prefix of each row (xp is nondecreasing), so its length is the
+    # first False (argmin of a bool row, far cheaper than a sum), or k when all hold
+    below = xp <= xq[:, None]
+    i = clip(np.where(below[:, -1], k, np.argmin(below, axis=1)) - 1, 0, k - 2)
+    r = _arange(xp.shape[0])
     x0, x1 = xp[r, i], xp[r, i + 1]
     u = clip((xq - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
     return [fp[r, i] + u * (fp[r, i + 1] - fp[r, i]) for fp in fps]
@@ -51,13 +54,15 @@ class Control:
         self.integral = np.zeros(n)
         self.prev_error = np.zeros(n)
         self.steering = np.zeros(n)
+        self._rows_of: PlanningOutput | None = None  # the plan _t_rows and _s_rows are of
+        self._t_rows = self._s_rows = np.zeros((n, 0))
 
     def step(self, now_s: float, plan: PlanningOutput, plan_time_s: float,
              loc: LocalizationOutput, chassis: ChassisOutput) -> ControlOutput:
         p = self.p
         dt = self.world.dt_s
         n = loc.x.shape[0]
-        r = np.arange(n)
+        r = _arange(n)
         # match the pose on the trajectory (nearest valid point, then the segment)
         d2 = (plan.x - loc.x[:, None]) ** 2 + (plan.y - loc.y[:, None]) ** 2
         d2 = np.where(plan.valid, d2, np.inf)
@@ -70,7 +75,11 @@ class Control:
         heading_err = wrap_angle(loc.heading - th)
         # longitudinal
         tq = now_s - plan_time_s + p["preview_time_s"]
-        t_rows = np.where(plan.valid, plan.t, plan.t[:, :1] + 1e3 + plan.t)
+        if plan is not self._rows_of:  # a plan's interpolation tables, made once per plan
+            self._rows_of = plan
+            self._t_rows = np.where(plan.valid, plan.t, plan.t[:, :1] + 1e3 + plan.t)
+            self._s_rows = np.where(plan.valid, plan.s, plan.s[:, -1:] + 1e3 + plan.t)
+        t_rows, s_rows = self._t_rows, self._s_rows
         v_ref, a_ref = _interp_rows(tq, t_rows, plan.v, plan.a)
         (s_ref,) = _interp_rows(np.full(n, now_s - plan_time_s), t_rows, plan.s)
         speed = chassis.speed
@@ -98,7 +107,6 @@ class Control:
         wb = p["wheelbase_m"]
         look = np.maximum(p["pure_pursuit_min_lookahead_m"],
                           p["pure_pursuit_lookahead_gain_s"] * speed)
-        s_rows = np.where(plan.valid, plan.s, plan.s[:, -1:] + 1e3 + plan.t)
         tx, ty = _interp_rows(s_match + look, s_rows, plan.x, plan.y)
         kappa = plan.kappa[r, i]
         # one arctan2 call for the three angles that do not depend on each other (arctan(v) is

@@ -16,7 +16,7 @@ from rocas import numerics
 from rocas.ads import classifier
 from rocas.ads.localization import LocalizationOutput
 from rocas.sim import rng
-from rocas.sim.geometry import clip, segments_blocked, wrap_angle
+from rocas.sim.geometry import clip, segments_blocked_by_edge, wrap_angle
 from rocas.sim.world import (
     KIND_BOX,
     KIND_CONE,
@@ -138,33 +138,77 @@ class Perception:
         self.age = np.zeros((n, m))
         self.brake_frames = np.zeros(n, dtype=np.int64)
         self.weights = classifier.load_weights()
+        self._weather_consts: dict[str, np.ndarray] | None = None
+        self._slot_consts: dict[str, np.ndarray] | None = None
         edges = world.area_edges
         self.edge_weight_kind = world.area_kind[world.area_edge_owner] if len(edges) else None
 
     # -- helpers -----------------------------------------------------------------------------
+    def _weather(self) -> dict[str, np.ndarray]:
+        """What the weather and the parameters fix for a run (computed once)."""
+        if self._weather_consts is None:
+            p = self.p
+            w = self.world.weather
+            fog = w[:, 2] / 100.0
+            rain = w[:, 1] / 100.0
+            sun_alt = w[:, 4]
+            self._weather_consts = {
+                "sun_az": np.deg2rad(w[:, 3]),
+                "sun_low": (sun_alt < p["glare_sun_altitude_deg"]) & (sun_alt > -2.0),
+                "glare_window": np.deg2rad(p["glare_azimuth_window_deg"]),
+                "factor": (1.0 - p["fog_range_factor"] * fog)
+                * (1.0 - p["precipitation_range_factor"] * rain),
+                "glare_keep": 1.0 - p["glare_range_factor"],
+                "blur": 1.0 + p["weather_noise_gain"][:, None] * (
+                    0.6 * w[:, 2:3] / 100.0 + 0.4 * w[:, 1:2] / 100.0),
+                "fov_half": np.deg2rad(p["fov_deg"])[:, None] / 2,
+                "tl_facing_tol": np.deg2rad(p["tl_facing_tolerance_deg"])[:, None],
+                "tl_fov_half": np.deg2rad(p["tl_fov_deg"])[:, None] / 2,
+            }
+        return self._weather_consts
+
     def _range_factor(self, ego_yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        p = self.p
-        w = self.world.weather
-        fog = w[:, 2] / 100.0
-        rain = w[:, 1] / 100.0
-        sun_az = np.deg2rad(w[:, 3])
-        sun_alt = w[:, 4]
-        glare = ((sun_alt < p["glare_sun_altitude_deg"]) & (sun_alt > -2.0)
-                 & (np.abs(wrap_angle(ego_yaw - sun_az))
-                    < np.deg2rad(p["glare_azimuth_window_deg"])))
-        factor = (1.0 - p["fog_range_factor"] * fog) * (1.0 - p["precipitation_range_factor"]
-                                                        * rain)
-        return factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0), glare, factor
+        c = self._weather()
+        glare = c["sun_low"] & (np.abs(wrap_angle(ego_yaw - c["sun_az"])) < c["glare_window"])
+        factor = c["factor"]
+        return factor * np.where(glare, c["glare_keep"], 1.0), glare, factor
+
+    def _slots(self, gt: ObstacleFrame) -> dict[str, np.ndarray]:
+        """What the obstacle slots' kinds, models and heights fix (the world's fixed slots:
+        computed once, again only if given other arrays)."""
+        got = self._slot_consts
+        if got is None or got["_kind"] is not gt.kind or got["_model"] is not gt.model \
+                or got["_height"] is not gt.height:
+            p = self.p
+            kind = gt.kind
+            vru = (kind == KIND_CYCLIST) | (kind == KIND_PEDESTRIAN)
+            static_obj = (kind == KIND_CONE) | (kind == KIND_BOX)
+            is_ped = kind == KIND_PEDESTRIAN
+            is_bike = kind == KIND_CYCLIST
+            got = self._slot_consts = {
+                "_kind": kind, "_model": gt.model, "_height": gt.height,
+                "static_obj": static_obj, "movable": ~static_obj,
+                "base_range": np.where(vru, p["pedestrian_range_m"][:, None],
+                                       np.where(static_obj, p["static_object_range_m"][:, None],
+                                                p["max_range_m"][:, None])),
+                "tall": gt.height >= p["min_obstacle_height_m"][:, None],
+                "type_known": np.where(is_ped, T_PEDESTRIAN, np.where(is_bike, T_BICYCLE,
+                                                                      T_VEHICLE)),
+                "is_cone": kind == KIND_CONE, "is_box": kind == KIND_BOX,
+                "sub_known": np.where(is_ped, ST_PEDESTRIAN, np.where(
+                    is_bike, ST_CYCLIST, clip(gt.model, 0, 3) + ST_CAR)),
+            }
+        return got
 
     def _edge_opacity(self) -> np.ndarray:
-        """(N, 1, 1, E) how much each area edge hides what is behind it (0 for an area a variant
+        """(E, N, 1, 1) how much each area edge hides what is behind it (0 for an area a variant
         disabled); fixed for a run, computed once."""
         if self._opacity is None:
             w = self.world
             enabled = w.area_enabled[:, w.area_edge_owner]  # (N, E)
             opacity = np.where(self.edge_weight_kind == 0, 1.0,
                                self.p["vegetation_opacity"][:, None])  # (N, E)
-            self._opacity = np.where(enabled, opacity, 0.0)[:, None, None, :]
+            self._opacity = np.ascontiguousarray(np.where(enabled, opacity, 0.0).T)[..., None, None]
         return self._opacity
 
     def _visibility(self, ex: np.ndarray, ey: np.ndarray, gt: ObstacleFrame) -> np.ndarray:
@@ -176,9 +220,11 @@ class Perception:
         hl = gt.length / 2
         px = np.stack([gt.x, gt.x + hl * c, gt.x - hl * c], -1)  # (N, M, 3)
         py = np.stack([gt.y, gt.y + hl * s, gt.y - hl * s], -1)
-        crosses = segments_blocked(ex[:, None, None], ey[:, None, None], px, py, w.area_edges)
-        block = np.where(crosses, self._edge_opacity(), 0.0)
-        return (1.0 - block.max(axis=-1)).mean(axis=-1)
+        # (E, N, M, 3): the edges first, so that the largest opacity is a fast outer reduction
+        crosses = segments_blocked_by_edge(ex[:, None, None], ey[:, None, None], px, py,
+                                           w.area_edges)
+        block = np.maximum.reduce(np.where(crosses, self._edge_opacity(), 0.0), axis=0)
+        return (1.0 - block).mean(axis=-1)
 
     # -- the step -----------------------------------------------------------------------------
     def step(self, tick: int, ego_x: np.ndarray, ego_y: np.ndarray, ego_yaw: np.ndarray,
@@ -193,27 +239,22 @@ class Perception:
         ry = -dxw * se + dyw * ce
         dist = np.hypot(rx, ry)
         bearing = numerics.arctan2(ry, rx)
-        factor, glare, weather_factor = self._range_factor(ego_yaw)
-        vru = (gt.kind == KIND_CYCLIST) | (gt.kind == KIND_PEDESTRIAN)
-        static_obj = (gt.kind == KIND_CONE) | (gt.kind == KIND_BOX)
-        base_range = np.where(vru, p["pedestrian_range_m"][:, None],
-                              np.where(static_obj, p["static_object_range_m"][:, None],
-                                       p["max_range_m"][:, None]))
-        eff_range = base_range * factor[:, None]
-        in_fov = (np.abs(bearing) <= np.deg2rad(p["fov_deg"])[:, None] / 2) | (
+        factor, glare, _ = self._range_factor(ego_yaw)
+        slots = self._slots(gt)
+        static_obj = slots["static_obj"]
+        eff_range = slots["base_range"] * factor[:, None]
+        in_fov = (np.abs(bearing) <= self._weather()["fov_half"]) | (
             dist <= p["rear_range_m"][:, None])
         visible = self._visibility(ego_x, ego_y, gt)
         conf = visible * clip(1.0 - p["confidence_range_decay"][:, None] * dist / eff_range,
                                  0.0, 1.0)
-        detected = ((dist <= eff_range) & in_fov & (gt.height >= p["min_obstacle_height_m"][:, None])
+        detected = ((dist <= eff_range) & in_fov & slots["tall"]
                     & (visible >= p["occlusion_min_visible_fraction"][:, None])
                     & (conf >= p["min_confidence"][:, None]))
         # measurement (world frame, via the localization estimate)
         noise = rng.normal(w.seeds, tick, _STREAM_DET, (m, 5)) if m else np.zeros((n, 0, 5))
-        blur = 1.0 + p["weather_noise_gain"][:, None] * (
-            0.6 * w.weather[:, 2:3] / 100.0 + 0.4 * w.weather[:, 1:2] / 100.0)
         std = p["position_noise_std_m"][:, None] * (
-            1.0 + p["noise_range_gain"][:, None] * dist / eff_range) * blur
+            1.0 + p["noise_range_gain"][:, None] * dist / eff_range) * self._weather()["blur"]
         mrx = rx + std * noise[..., 0]
         mry = ry + std * noise[..., 1]
         lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
@@ -265,25 +306,19 @@ class Perception:
         self.theading = np.where(detected, np.where(first, box_yaw, resolved), self.theading)
         published = (self.track_id >= 0) & (self.hits >= p["track_min_hits"][:, None])
         # classification and colour
-        movable = ~static_obj
         unsure = conf < p["classify_min_confidence"][:, None]
-        is_ped = gt.kind == KIND_PEDESTRIAN
-        is_bike = gt.kind == KIND_CYCLIST
-        unknown = movable & unsure
+        unknown = slots["movable"] & unsure
         typ = np.where(static_obj, T_UNKNOWN_UNMOVABLE, np.where(
-            unknown, T_UNKNOWN_MOVABLE, np.where(is_ped, T_PEDESTRIAN, np.where(
-                is_bike, T_BICYCLE, T_VEHICLE))))
-        sub = np.where(gt.kind == KIND_CONE, ST_CONE, np.where(
-            gt.kind == KIND_BOX, ST_BOX, np.where(unknown, ST_UNKNOWN, np.where(
-                is_ped, ST_PEDESTRIAN, np.where(is_bike, ST_CYCLIST,
-                                                clip(gt.model, 0, 3) + ST_CAR)))))
+            unknown, T_UNKNOWN_MOVABLE, slots["type_known"]))
+        sub = np.where(slots["is_cone"], ST_CONE, np.where(
+            slots["is_box"], ST_BOX, np.where(unknown, ST_UNKNOWN, slots["sub_known"])))
         color = np.where(dist <= p["color_max_distance_m"][:, None], gt.color, -1)
         # publish in the ego frame of the localization estimate
         ddx, ddy = self.tx - loc.x[:, None], self.ty - loc.y[:, None]
         out_x = ddx * lc + ddy * ls
         out_y = -ddx * ls + ddy * lc
         brake_prob, brake = self._brake(bearing, dist, gt, visible * detected, glare)
-        tl = self._lights(ego_x, ego_y, ego_yaw, light_colors, weather_factor, glare)
+        tl = self._lights(ego_x, ego_y, ego_yaw, light_colors, factor)
         return PerceptionOutput(
             published=published, track_id=self.track_id.copy(), type=typ, sub_type=sub,
             color=color, x=out_x, y=out_y, theta=wrap_angle(self.theading - loc.heading[:, None]),
@@ -311,9 +346,11 @@ class Perception:
         return prob, self.brake_frames >= p["brake_min_frames"]
 
     def _lights(self, ex: np.ndarray, ey: np.ndarray, eyaw: np.ndarray, colors: np.ndarray,
-                weather_factor: np.ndarray, glare: np.ndarray) -> dict[str, np.ndarray]:
+                vis: np.ndarray) -> dict[str, np.ndarray]:
+        """``vis``: (N,) the weather's and the glare's range factor (:meth:`_range_factor`)."""
         p = self.p
         w = self.world
+        k = self._weather()
         n, nl = colors.shape
         if nl == 0:
             return no_lights(n)
@@ -322,11 +359,9 @@ class Perception:
         rx, ry = dx * c + dy * s, -dx * s + dy * c
         dist = np.hypot(rx, ry)
         facing = np.abs(wrap_angle(w.light_facing - (eyaw[:, None] + np.pi))) \
-            <= np.deg2rad(p["tl_facing_tolerance_deg"])[:, None]
-        in_view = (rx > 0) & (np.abs(numerics.arctan2(ry, rx))
-                              <= np.deg2rad(p["tl_fov_deg"])[:, None] / 2)
+            <= k["tl_facing_tol"]
+        in_view = (rx > 0) & (np.abs(numerics.arctan2(ry, rx)) <= k["tl_fov_half"])
         detected = (dist <= p["tl_max_range_m"][:, None]) & facing & in_view
-        vis = weather_factor * np.where(glare, 1.0 - p["glare_range_factor"], 1.0)
         readable = vis >= p["tl_min_visibility"]
         color = np.where(readable[:, None], _SIM_TO_TL[colors], TL_UNKNOWN)
         color = np.where(colors == LIGHT_CODES["off"], TL_BLACK, color)

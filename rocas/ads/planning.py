@@ -114,6 +114,50 @@ class Planning:
                                 c["follow_time_headway_s"])
         self.idm_root = (2.0 * np.sqrt(p["max_accel_mps2"] * p["comfort_decel_mps2"]))[:, None]
         self.rows = np.arange(n)
+        # the cruise-speed preview's fixed terms, flags and the trajectory's steps
+        self.curve_on = self.preview <= c["curve_preview_m"]
+        self.cruise_cap = np.broadcast_to(c["cruise_speed_mps"], (n, self.preview.shape[1]))
+        self.brake_room = 2.0 * (0.5 * c["comfort_decel_mps2"]) * self.preview
+        self.tangent = p["use_path_tangent_heading"][:, None, None] >= 0.5
+        self.stop_dest = np.full(n, world.road.destination_s_m - p["destination_buffer_m"]
+                                 - self.ego_hl)
+        self.pbrake_on = p["perception_brake_enabled"] >= 0.5
+        self.unknown_red = p["unknown_light_as_red"] >= 0.5
+        self.traj_dt = np.diff(self.t, axis=1)
+        self.zero_col = np.zeros((n, 1))
+        self._grid: tuple[object, ...] | None = None
+
+    def _forecast_grid(self, pred: PredictionOutput) -> tuple[object, ...]:
+        """What the forecast's time grid decides (fixed while prediction publishes the same
+        grid arrays): the forecast points some variant checks for overlap (their count), the
+        collision check's times (now, then the forecast's) up to the last one some variant
+        checks and which it checks, and where those times fall on the trajectory's grid."""
+        got = self._grid
+        if got is not None and got[0] is pred.traj_t and got[1] is pred.traj_valid:
+            return got[2:]
+        p, c = self.p, self.cols
+        n = pred.traj_t.shape[0]
+        # forecast points no variant checks (past its forecast's or its overlap horizon)
+        # cannot overlap: only the leading points up to the last one some variant checks are
+        # projected, the others would be masked out
+        checks_k = pred.traj_valid & (pred.traj_t <= p["overlap_check_horizon_s"][:, None])
+        live_k = np.flatnonzero(checks_k.any(axis=0))
+        kk = int(live_k[-1]) + 1 if live_k.size else 0
+        # collision check at the forecast times (and now), only the leading times up to the
+        # last one some variant checks (now is always checked): the others' gaps would be
+        # masked out
+        tp = np.concatenate([np.zeros((n, 1)), pred.traj_t], axis=1)  # (N, Kp + 1)
+        tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
+            tp <= c["collision_check_horizon_s"]) & (tp <= p["trajectory_horizon_s"][:, None])
+        kc = int(np.flatnonzero(tcheck.any(axis=0))[-1]) + 1
+        tp, tcheck = tp[:, :kc], tcheck[:, :kc]
+        # the trajectory's samples at those times (uniform time grid per row)
+        t = self.t
+        f = clip(tp / t[:, 1:2], 0.0, t.shape[1] - 1.000001)
+        i = f.astype(np.int64)
+        flat = np.arange(n)[:, None] * t.shape[1] + i
+        self._grid = (pred.traj_t, pred.traj_valid, kk, tp, tcheck, kc, flat, f - i)
+        return self._grid[2:]
 
     def step(self, pred: PredictionOutput, per: PerceptionOutput, loc: LocalizationOutput,
              chassis: ChassisOutput) -> PlanningOutput:
@@ -132,20 +176,19 @@ class Planning:
         _, _, _, kap = reference_at(road, ahead)
         ii = road.ref_index(ahead)
         v_curve = np.sqrt(p["max_lateral_accel_mps2"][:, None] / np.maximum(np.abs(kap), 1e-4))
-        v_curve = np.where(dist <= c("curve_preview_m"), v_curve, np.inf)
+        v_curve = np.where(self.curve_on, v_curve, np.inf)
         cap = np.minimum.reduce([
-            np.broadcast_to(c("cruise_speed_mps"), ahead.shape),
+            self.cruise_cap,
             road.ref_speed_limit[ii] * c("speed_limit_factor"), v_curve,
             np.where(road.ref_junction[ii], c("junction_speed_mps"), np.inf)])
-        b_pre = 0.5 * c("comfort_decel_mps2")
-        v_cruise = np.min(np.sqrt(cap * cap + 2.0 * b_pre * dist), axis=1)
+        v_cruise = np.min(np.sqrt(cap * cap + self.brake_room), axis=1)
         # --- obstacles relative to the reference ------------------------------------------
         pub = pred.published
         hl_o, hw_o = pred.length / 2, pred.width / 2
         vru = (pred.type == T_PEDESTRIAN) | (pred.type == T_BICYCLE)
         oi, so, lo = project_on_reference(road, pred.x, pred.y)
         ref_h = road.ref_heading[oi]
-        tangent = p["use_path_tangent_heading"][:, None, None] >= 0.5
+        tangent = self.tangent
         head_now = np.where(tangent[..., 0], pred.traj_heading[..., 0], pred.heading)
         rel = head_now - ref_h
         lat_ext = hw_o * np.abs(np.cos(rel)) + hl_o * np.abs(np.sin(rel))
@@ -162,7 +205,7 @@ class Planning:
         static &= so + lon_ext > (s0 - hl_e)[:, None]
         half = lat_ext + c("static_obstacle_lateral_buffer_m") + hw_e + buf_vru
         lo_b, hi_b = lo - half, lo + half
-        cands = np.concatenate([np.zeros((n, 1)), lo_b - 0.01, hi_b + 0.01], axis=1)
+        cands = np.concatenate([self.zero_col, lo_b - 0.01, hi_b + 0.01], axis=1)
         inside = static[:, None, :] & (cands[:, :, None] > lo_b[:, None, :]) & (
             cands[:, :, None] < hi_b[:, None, :])
         feasible = ~inside.any(-1) & (np.abs(cands) <= c("nudge_max_offset_m"))
@@ -202,7 +245,8 @@ class Planning:
         vru_stop = in_path_now & vru & pred.is_static
         # forecasts against the path (only slots that move in some variant are projected)
         mov = not_behind & ~pred.is_static
-        cols = np.flatnonzero(mov.any(axis=0))
+        kk, tp, tcheck, kc, t_flat, t_frac = self._forecast_grid(pred)
+        cols = np.flatnonzero(mov.any(axis=0)) if kk else np.zeros(0, dtype=np.int64)
         any_over = np.zeros((n, m), dtype=bool)
         body_over = np.zeros((n, m), dtype=bool)
         k_in = np.zeros((n, m), dtype=np.int64)
@@ -210,20 +254,21 @@ class Planning:
         s_hi = np.full((n, m), -np.inf)
         if cols.size:
             sub = (slice(None), cols)
-            _, sk, lk = project_on_reference(road, pred.traj_x[sub], pred.traj_y[sub])
+            subk = (slice(None), cols, slice(0, kk))
+            _, sk, lk = project_on_reference(road, pred.traj_x[subk], pred.traj_y[subk])
             ref_hk = road.ref_heading[road.ref_index(sk)]
-            head_k = np.where(tangent, pred.traj_heading[sub], pred.heading[sub][..., None])
+            head_k = np.where(tangent, pred.traj_heading[subk], pred.heading[sub][..., None])
             rel_k = head_k - ref_hk
             ca, sa = np.abs(np.cos(rel_k)), np.abs(np.sin(rel_k))
             hw_s, hl_s = hw_o[sub][..., None], hl_o[sub][..., None]
             lat_k = hw_s * ca + hl_s * sa
             lon_k = hl_s * ca + hw_s * sa
-            tk = pred.traj_t[:, None, :]
+            tk = pred.traj_t[:, None, :kk]
             # distance of each forecast point from the ego's path and the bodies' half widths,
             # shared by the buffered overlap and the body overlap below
             dist_k = np.abs(lk - offset_at(sk))
             half_k = hw_e + lat_k
-            over = (mov[sub][..., None] & pred.traj_valid[:, None, :]
+            over = (mov[sub][..., None] & pred.traj_valid[:, None, :kk]
                     & (tk <= p["overlap_check_horizon_s"][:, None, None])
                     & (dist_k < half_k + c("lateral_safety_buffer_m")[..., None] + buf_vru[sub][..., None])
                     & (sk + lon_k > (s0 - hl_e)[:, None, None]))
@@ -284,9 +329,9 @@ class Planning:
         req = v0 * v0 / (2.0 * np.maximum(room, 0.1))
         stop_for_light = has & (dist <= p["tl_consider_distance_m"]) & (room > -0.5) & (
             (col == TL_RED) | ((col == TL_YELLOW) & (req <= p["yellow_stop_max_decel_mps2"]))
-            | ((col == TL_UNKNOWN) & (p["unknown_light_as_red"] >= 0.5)))
+            | ((col == TL_UNKNOWN) & self.unknown_red))
         stop_light = np.where(stop_for_light, s0 + room, inf)
-        stop_dest = np.full(n, road.destination_s_m - p["destination_buffer_m"] - hl_e)
+        stop_dest = self.stop_dest
         stops = np.concatenate([stop_yield, stop_vru, stop_block[:, None], stop_light[:, None],
                                 stop_dest[:, None]], axis=1)
         gaps = np.concatenate([gap_follow, stops - s0[:, None]], axis=1)
@@ -333,7 +378,7 @@ class Planning:
         a_cmd = np.where(urgent, -p["emergency_decel_mps2"], a_cmd)
         estop |= urgent
         estop_reason = np.where(urgent, E_NO_PATH, estop_reason)
-        pbrake = per.brake & (p["perception_brake_enabled"] >= 0.5)
+        pbrake = per.brake & self.pbrake_on
         a_cmd = np.where(pbrake, np.minimum(a_cmd, -p["perception_brake_decel_mps2"]), a_cmd)
         estop |= pbrake
         estop_reason = np.where(pbrake, E_PERCEPTION_BRAKE, estop_reason)
@@ -343,19 +388,17 @@ class Planning:
         vcap = np.maximum(v_cruise, v0)
         traj = self._trajectory(s0, v0, a_cmd, vcap, t, offset_at)
         # collision check at the forecast times (and now): ego trajectory vs obstacles
-        tp = np.concatenate([np.zeros((n, 1)), pred.traj_t], axis=1)  # (N, Kp + 1)
-        tcheck = np.concatenate([np.ones((n, 1), bool), pred.traj_valid], axis=1) & (
-            tp <= c("collision_check_horizon_s")) & (tp <= p["trajectory_horizon_s"][:, None])
-        ex, ey, eh, es = self._sample(traj, t, tp)
+        ex, ey, eh, es = self._sample(traj, t_flat, t_frac)
         # only slots some variant considers are checked (the others' gaps would be discarded)
         checked = consider | mov
         cols = np.flatnonzero(checked.any(axis=0))
         if cols.size:
             sub = (slice(None), cols)
-            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[sub]], axis=-1)
-            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[sub]], axis=-1)
+            subk = (slice(None), cols, slice(0, kc - 1))
+            ox = np.concatenate([pred.x[sub][..., None], pred.traj_x[subk]], axis=-1)
+            oy = np.concatenate([pred.y[sub][..., None], pred.traj_y[subk]], axis=-1)
             oh = np.where(tangent, np.concatenate([head_now[sub][..., None],
-                                                   pred.traj_heading[sub]], -1),
+                                                   pred.traj_heading[subk]], -1),
                           pred.heading[sub][..., None])
             gap = box_gap(ex[:, None, :], ey[:, None, :], eh[:, None, :], hl_e, hw_e,
                           ox, oy, oh, hl_o[sub][..., None], hw_o[sub][..., None])
@@ -412,17 +455,18 @@ class Planning:
         )
 
     @staticmethod
-    def _sample(traj: tuple[np.ndarray, ...], t: np.ndarray, tq: np.ndarray
+    def _sample(traj: tuple[np.ndarray, ...], flat: np.ndarray, u: np.ndarray
                 ) -> tuple[np.ndarray, ...]:
-        """Trajectory x, y, theta, s at times tq (N, Q) (uniform time grid per row)."""
-        dt = t[:, 1:2]
-        f = clip(tq / dt, 0.0, t.shape[1] - 1.000001)
-        i = f.astype(np.int64)
-        u = f - i
-        r = np.arange(t.shape[0])[:, None]
+        """Trajectory x, y, theta, s (N, Q) at the times whose grid samples are ``flat``
+        (N, Q) (index into a flattened (N, K) trajectory array) plus the fraction ``u`` of the
+        next step (:meth:`_forecast_grid`)."""
         x, y, th, _, s = traj[:5]
-        lerp = [a[r, i] + u * (a[r, i + 1] - a[r, i]) for a in (x, y, s)]
-        return lerp[0], lerp[1], th[r, i], lerp[2]
+        out = []
+        for a in (x, y, s):
+            a = a.reshape(-1)
+            a0 = a.take(flat)
+            out.append(a0 + u * (a.take(flat + 1) - a0))
+        return out[0], out[1], th.reshape(-1).take(flat), out[2]
 
     def _trajectory(self, s0: np.ndarray, v0: np.ndarray, a_cmd: np.ndarray, vcap: np.ndarray,
                     t: np.ndarray, offset_at) -> tuple[np.ndarray, ...]:  # noqa: ANN001
@@ -431,16 +475,24 @@ class Planning:
         v_acc = v0[:, None] + a * ACCEL_DECAY_S * self.accel_fade
         v_dec = v0[:, None] + a * t
         v = clip(np.where(a > 0, v_acc, v_dec), 0.0, vcap[:, None])
-        dt = np.diff(t, axis=1)
+        dt = self.traj_dt
         s = s0[:, None] + np.concatenate(
-            [np.zeros((t.shape[0], 1)), np.cumsum(0.5 * (v[:, 1:] + v[:, :-1]) * dt, axis=1)], 1)
-        acc = np.concatenate([np.diff(v, axis=1) / dt, np.zeros((t.shape[0], 1))], axis=1)
+            [self.zero_col, np.cumsum(0.5 * (v[:, 1:] + v[:, :-1]) * dt, axis=1)], 1)
+        acc = np.concatenate([np.diff(v, axis=1) / dt, self.zero_col], axis=1)
         rx, ry, rh, rk = reference_at(road, s)
         d = offset_at(s)
         x = rx - d * np.sin(rh)
         y = ry + d * np.cos(rh)
         dd = _row_gradient(d) / np.maximum(_row_gradient(s), 1e-3)
-        th = wrap_angle(rh + numerics.arctan(dd))
+        # most of a path runs along the reference (no offset, dd == +-0.0, about 60 % of the
+        # points): arctan(+-0.0) is +-0.0, so only the other points go through arctan
+        turn = dd != 0.0
+        if turn.all():
+            atan = numerics.arctan(dd)
+        else:
+            atan = dd.copy()
+            atan[turn] = numerics.arctan(dd[turn])
+        th = wrap_angle(rh + atan)
         return x, y, th, rk, s, v, acc
 
 

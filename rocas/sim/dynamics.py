@@ -86,14 +86,24 @@ def bicycle_step(
     return VehicleState(x, y, wrap_angle(course + slip), course, v_next), realised
 
 
-def profile_speed(t: float, knots_t: np.ndarray, knots_v: np.ndarray) -> np.ndarray:
-    """Speed-profile value at time ``t``; knots (..., K), linear between knots, held outside."""
+def profile_speed(t: float, knots_t: np.ndarray, knots_v: np.ndarray,
+                  nondecreasing: bool = False) -> np.ndarray:
+    """Speed-profile value at time ``t``; knots (..., K), linear between knots, held outside.
+
+    ``nondecreasing``: the caller knows every row of ``knots_t`` to be nondecreasing (a
+    cheaper count of the knots passed, with the same result)."""
     k = knots_t.shape[-1]
     if k == 1:
         return knots_v[..., 0]
     kt = knots_t.reshape(-1, k)
     kv = knots_v.reshape(-1, k)
-    idx = clip((kt <= t).sum(-1) - 1, 0, k - 2)
+    below = kt <= t
+    if nondecreasing:
+        # kt <= t holds on a prefix of each row: its length is the first False (argmin of a
+        # bool row, far cheaper than a sum), or k when all hold
+        idx = clip(np.where(below[:, -1], k, np.argmin(below, axis=1)) - 1, 0, k - 2)
+    else:
+        idx = clip(below.sum(-1) - 1, 0, k - 2)
     r = np.arange(kt.shape[0])
     t0, t1, v0, v1 = kt[r, idx], kt[r, idx + 1], kv[r, idx], kv[r, idx + 1]
     u = clip((t - t0) / np.maximum(t1 - t0, 1e-9), 0.0, 1.0)
@@ -114,8 +124,8 @@ def path_point(path: np.ndarray, heading: np.ndarray, ds: np.ndarray, s: np.ndar
     # several times as much on a large batch
     k = path_rows(path) + i
     flat = path.reshape(-1, 2)
-    p0 = flat[k]
-    p1 = flat[k + 1]
+    p0 = np.take(flat, k, axis=0)
+    p1 = np.take(flat, k + 1, axis=0)
     return (p0[..., 0] + u * (p1[..., 0] - p0[..., 0]), p0[..., 1] + u * (p1[..., 1] - p0[..., 1]),
             heading.reshape(-1)[k])
 

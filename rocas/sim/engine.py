@@ -102,21 +102,21 @@ def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
     oracles = Oracles(world, np.full(n, scenario.ego.start_s_m))
     steps = world.num_ticks
     na = len(world.actor_ids)
-    ego_tr = np.zeros((n, steps + 1, 5))
-    act_tr = np.zeros((n, steps + 1, na, 4))
-    gap_tr = np.zeros((n, steps + 1))
+    # time-major buffers, so that a step writes contiguous rows; made batch-major at the end
+    ego_tm = np.zeros((steps + 1, 5, n))
+    act_tm = np.zeros((steps + 1, 4, n, na))
+    gap_tm = np.zeros((steps + 1, n))
     accel = np.zeros(n)
     columns = {m: i for i, m in enumerate(digest_modules)} if digest_modules is not None else None
     digests = np.zeros((n, len(columns))) if columns is not None else None
     oracles.update(0, ego, accel, actors.body, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
 
     def record(i: int) -> None:
-        for j, a in enumerate((ego.x, ego.y, ego.yaw, ego.speed, accel)):
-            ego_tr[:, i, j] = a
-        b = actors.body
-        for j, a in enumerate((b.x, b.y, b.yaw, b.speed)):
-            act_tr[:, i, :, j] = a
-        gap_tr[:, i] = oracles.last_gap
+        e, b = ego_tm[i], act_tm[i]
+        e[0], e[1], e[2], e[3], e[4] = ego.x, ego.y, ego.yaw, ego.speed, accel
+        body = actors.body
+        b[0], b[1], b[2], b[3] = body.x, body.y, body.yaw, body.speed
+        gap_tm[i] = oracles.last_gap
 
     record(0)
     dt_ns = round(world.dt_s * _NS)
@@ -143,6 +143,9 @@ def rollout(world: BatchWorld, scenarios: Sequence[Scenario], run: StackRun, *,
         record(tick + 1)
         if on_tick is not None:
             on_tick(tick)
+    ego_tr = np.ascontiguousarray(ego_tm.transpose(2, 0, 1))  # (N, T + 1, 5)
+    act_tr = np.ascontiguousarray(act_tm.transpose(2, 0, 3, 1))  # (N, T + 1, A, 4)
+    gap_tr = np.ascontiguousarray(gap_tm.T)  # (N, T + 1)
     oracles.finish_route(ego_tr[..., :2])
     return BatchResult(
         times=np.arange(steps + 1) * world.dt_s, ego=ego_tr, actors=act_tr, min_gap=gap_tr,

@@ -131,6 +131,27 @@ def segments_blocked(ox: np.ndarray, oy: np.ndarray, tx: np.ndarray, ty: np.ndar
     return (np.abs(denom) > 1e-12) & (t > 0.0) & (t < 1.0) & (u >= 0.0) & (u <= 1.0)
 
 
+def segments_blocked_by_edge(ox: np.ndarray, oy: np.ndarray, tx: np.ndarray, ty: np.ndarray,
+                             edges: np.ndarray) -> np.ndarray:
+    """:func:`segments_blocked` with the edges as the leading axis: bool (E, ...) for segments
+    ``(ox, oy) -> (tx, ty)`` of broadcast shape (...). Each element is computed with the very
+    same operations; a reduction over the edges then runs over the outer axis (numpy reduces
+    a short inner axis about ten times slower)."""
+    shape = (edges.shape[0],) + (1,) * np.ndim(tx)
+    x0, y0, x1, y1 = (edges[:, j].reshape(shape) for j in range(4))
+    rx = tx - ox
+    ry = ty - oy
+    sx = x1 - x0
+    sy = y1 - y0
+    qpx = x0 - ox
+    qpy = y0 - oy
+    denom = rx * sy - ry * sx
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qpx * sy - qpy * sx) / denom
+        u = (qpx * ry - qpy * rx) / denom
+    return (np.abs(denom) > 1e-12) & (t > 0.0) & (t < 1.0) & (u >= 0.0) & (u <= 1.0)
+
+
 def _k_smallest(d2: np.ndarray, k: int) -> np.ndarray:
     """Indices (R, k) of each row's k smallest values, ties broken towards the lower index, in
     ascending index order. (``argpartition`` breaks ties by its SIMD path, so the same world
@@ -158,6 +179,10 @@ class NearestGrid:
         self._flat = candidates.reshape(-1, candidates.shape[2])  # (GX * GY, K): one gather
         # the point set plus a far-away sentinel row (index num_points)
         self.points = np.vstack([points, [[1e7, 1e7]]])
+        # each cell's candidates' coordinates, (GX * GY, K) each: a query gathers a cell's row
+        # instead of its indices and then their points
+        self._flat_x = np.ascontiguousarray(self.points[self._flat, 0])
+        self._flat_y = np.ascontiguousarray(self.points[self._flat, 1])
 
     @classmethod
     def build(cls, points: np.ndarray, cell_m: float, k: int, margin_m: float) -> NearestGrid:
@@ -179,27 +204,34 @@ class NearestGrid:
             cand[start:start + 1024, :k_eff] = np.where(near, idx, n)
         return cls(lo, cell_m, cand.reshape(gx, gy, k), points)
 
-    def query(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Candidate point indices near (x, y), shape (..., K)."""
+    def cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Index of the grid cell of (x, y) into the flattened grid, shape as ``x``."""
         ix = clip(((x - self.origin[0]) / self.cell_m).astype(np.int64), 0, self.shape[0] - 1)
         iy = clip(((y - self.origin[1]) / self.cell_m).astype(np.int64), 0, self.shape[1] - 1)
-        return self._flat[ix * self.shape[1] + iy]
+        return ix * self.shape[1] + iy
+
+    def query(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Candidate point indices near (x, y), shape (..., K)."""
+        return np.take(self._flat, self.cell(x, y), axis=0)
 
 
 def nearest_on(grid: NearestGrid, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Index of the grid's nearest point and the squared distance to it, for query points of
     any shape (far queries get the sentinel index ``num_points`` at a huge distance)."""
-    cand = grid.query(x, y)
-    pts = grid.points[cand]  # (..., K, 2): one gather
-    d2 = (pts[..., 0] - x[..., None]) ** 2 + (pts[..., 1] - y[..., None]) ** 2
+    cell = grid.cell(x, y)
+    # the candidates' coordinates, one row of each table per query (``take`` of rows is
+    # several times faster than indexing with an array)
+    px = np.take(grid._flat_x, cell, axis=0)  # (..., K)
+    py = np.take(grid._flat_y, cell, axis=0)
+    d2 = (px - x[..., None]) ** 2 + (py - y[..., None]) ** 2
     # the argmin's entries, gathered from flat rows (what take_along_axis does, without its
     # Python overhead)
-    k = cand.shape[-1]
-    c2, d22 = cand.reshape(-1, k), d2.reshape(-1, k)
-    rows = _arange(c2.shape[0])
+    k = px.shape[-1]
+    d22 = d2.reshape(-1, k)
     j = d22.argmin(axis=1)
-    shape = cand.shape[:-1]
-    return c2[rows, j].reshape(shape), d22[rows, j].reshape(shape)
+    flat_j = _arange(d22.shape[0]) * k + j
+    return (grid._flat.reshape(-1).take(cell.reshape(-1) * k + j).reshape(cell.shape),
+            d22.reshape(-1).take(flat_j).reshape(cell.shape))
 
 
 _ARANGES: dict[int, np.ndarray] = {}

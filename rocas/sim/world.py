@@ -319,21 +319,40 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
     n, na, ne = len(scenarios), len(first.actors), len(first.objects)
     nl = len(first.traffic_lights)
     kind_code = {"vehicle": KIND_VEHICLE, "cyclist": KIND_CYCLIST, "pedestrian": KIND_PEDESTRIAN}
-    paths = [[_actor_path(s, i) for i in range(na)] for s in scenarios]
+    # variants of a batch mostly share their actors' paths: each distinct path (a function of
+    # the route, waypoints and offset on the batch's one map), its resampling and a
+    # variant's headings are computed once and copied (the same values)
+    path_keys = [[(a.route, a.waypoints, a.lateral_offset_m) for a in s.actors]
+                 for s in scenarios]
+    known: dict[tuple[object, ...], np.ndarray] = {}
+    lengths: dict[tuple[object, ...], float] = {}
+    for s, row in zip(scenarios, path_keys, strict=True):
+        for i, key in enumerate(row):
+            if key not in known:
+                known[key] = _actor_path(s, i)
+                lengths[key] = _length(known[key])
     # each variant samples its paths with its own count (as alone in a batch); a batch-wide
     # count made a variant's result depend on the other variants' path lengths
-    counts = [max([int(math.ceil(_length(p) / ACTOR_PATH_SPACING_M)) + 1 for p in row] + [2])
-              for row in paths]
+    counts = [max([int(math.ceil(lengths[k] / ACTOR_PATH_SPACING_M)) + 1 for k in row] + [2])
+              for row in path_keys]
     npts = max(counts)
     actor_path = np.zeros((n, na, npts, 2))
     actor_heading = np.zeros((n, na, npts))
     actor_ds = np.zeros((n, na))
+    sampled: dict[tuple[object, ...], tuple[np.ndarray, float]] = {}
+    headings: dict[tuple[object, ...], np.ndarray] = {}
     for v, c in enumerate(counts):
-        for i in range(na):
-            actor_path[v, i, :c], actor_ds[v, i] = resample_polyline(paths[v][i], c)
+        for i, key in enumerate(path_keys[v]):
+            got = sampled.get((key, c))
+            if got is None:
+                got = sampled[key, c] = resample_polyline(known[key], c)
+            actor_path[v, i, :c], actor_ds[v, i] = got
         if na:
             actor_path[v, :, c:] = actor_path[v, :, c - 1:c]
-            actor_heading[v, :, :c] = polyline_headings(actor_path[v, :, :c])
+            hkey = (tuple(path_keys[v]), c)
+            if hkey not in headings:
+                headings[hkey] = polyline_headings(actor_path[v, :, :c])
+            actor_heading[v, :, :c] = headings[hkey]
             actor_heading[v, :, c:] = actor_heading[v, :, c - 1:c]
     actor_count = np.broadcast_to(np.asarray(counts, dtype=np.int64)[:, None], (n, na))
     kmax = max([len(a.speed_profile) for s in scenarios for a in s.actors] + [1])
@@ -454,7 +473,7 @@ def project_on_reference(road: RoadGeometry, x: np.ndarray, y: np.ndarray
     last = road.ref_points.shape[0] - 1
     far = idx > last
     idx = np.minimum(idx, last)
-    row = road.ref_table[idx]
+    row = np.take(road.ref_table, idx, axis=0)
     rx, ry, c, s = row[..., 0], row[..., 1], row[..., 6], row[..., 7]
     dx, dy = x - rx, y - ry
     lateral = -dx * s + dy * c
@@ -469,6 +488,6 @@ def reference_at(road: RoadGeometry, s: np.ndarray
     f = clip(s / REF_SPACING_M, 0.0, r - 1.000001)
     i = f.astype(np.int64)
     u = f - i
-    row = road.ref_table[i]
+    row = np.take(road.ref_table, i, axis=0)
     x0, y0 = row[..., 0], row[..., 1]
     return (x0 + u * (row[..., 4] - x0), y0 + u * (row[..., 5] - y0), row[..., 2], row[..., 3])
