@@ -23,6 +23,7 @@ input, as numpy does).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -96,14 +97,19 @@ def _from_small(vals: list[float], xa: np.ndarray) -> np.ndarray:
 def _exp_scalar(x: float) -> float:
     """exp's arithmetic on one float with |x| <= _EXP_PLAIN."""
     k = float(round(x * _INV_LN2))
+    return math.ldexp(_exp_reduced(x, k), int(k))
+
+
+def _exp_reduced(x: Any, k: Any) -> Any:
+    """e**(x - k ln 2), |x - k ln 2| <= ln(2) / 2: the same IEEE operations on Python floats
+    (the small-array path) or float64 arrays of one shape (the array path)."""
     hi = x - k * _LN2_HI
     lo = k * _LN2_LO
     r = hi - lo
     t = r * r
     p = _EXP_P
     c = r - t * (p[0] + t * (p[1] + t * (p[2] + t * (p[3] + t * p[4]))))
-    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
-    return math.ldexp(y, int(k))
+    return 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
 
 
 def _log_scalar(x: float) -> float:
@@ -112,7 +118,12 @@ def _log_scalar(x: float) -> float:
     big = m < 0.5 * _SQRT2
     if big:
         m = 2.0 * m
-    k = float(e - 1 if big else e)
+    return _log_reduced(m, float(e - 1 if big else e))
+
+
+def _log_reduced(m: Any, k: Any) -> Any:
+    """log(m) + k ln 2 for m in [sqrt(2)/2, sqrt(2)): the same IEEE operations on Python floats
+    (the small-array path) or float64 arrays of one shape (the array path)."""
     f = m - 1.0
     s = f / (2.0 + f)
     z = s * s
@@ -137,13 +148,7 @@ def exp(x: np.ndarray | float) -> np.ndarray:
     plain = xa.size == 0 or bool(_max_abs(xa) <= _EXP_PLAIN)
     xc = xa if plain else np.minimum(np.maximum(xa, _EXP_MIN), _EXP_MAX)
     k = np.rint(xc * _INV_LN2)
-    hi = xc - k * _LN2_HI
-    lo = k * _LN2_LO
-    r = hi - lo
-    t = r * r
-    p = _EXP_P
-    c = r - t * (p[0] + t * (p[1] + t * (p[2] + t * (p[3] + t * p[4]))))
-    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
+    y = _exp_reduced(xc, k)
     if plain:
         return _out(np.ldexp(y, k.astype(np.int64)), scalar)
     out = np.ldexp(y, np.where(k == k, k, 0.0).astype(np.int64))  # NaN: any exponent
@@ -192,16 +197,7 @@ def _log_core(xa: np.ndarray) -> np.ndarray:
     big = m < 0.5 * _SQRT2  # move m into [sqrt(2)/2, sqrt(2))
     m = np.where(big, 2.0 * m, m)
     k = (e - big.astype(e.dtype)).astype(np.float64)
-    f = m - 1.0
-    s = f / (2.0 + f)
-    z = s * s
-    w = z * z
-    g = _LOG_LG
-    t1 = w * (g[1] + w * (g[3] + w * g[5]))
-    t2 = z * (g[0] + w * (g[2] + w * (g[4] + w * g[6])))
-    r = t2 + t1
-    hfsq = 0.5 * f * f
-    return k * _LN2_HI - ((hfsq - (s * (hfsq + r) + k * _LN2_LO)) - f)
+    return _log_reduced(m, k)
 
 
 def power(base: np.ndarray | float, exponent: np.ndarray | float) -> np.ndarray:
