@@ -126,10 +126,8 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
 
     # a fix among the screened single parameters ends the search there: the fix is then chosen
     # from what every seed screens alike (the genetic search runs only when none is a fix).
-    # A screened fix that leaves the ego standing where the accident left it is no repair, and
-    # the screening tries only the ends of each range: when every screened fix stalls, the
-    # genetic search looks inside the ranges too (an A2 actors variant: the static buffer
-    # 0.6 -> 0 m brakes hard later in the run, 0.1-0.3 m takes the ego through the gap)
+    # A screened fix that leaves the ego standing where the accident left it is no repair:
+    # when every screened fix stalls, the genetic search runs too
     res = run_search(space, batch, search, 2,
                      checkpoint=checkpoint,
                      on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")),
@@ -142,12 +140,12 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
                               "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
                               "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
     candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals,
-                                 stalled=stalls if blocked else None)
+                                 stalled=stalls)
     if search.screen and all(c.generation == 0 for c in res.candidates):
-        # the screening decided: a screened fix sits at an end of its parameter's range, so its
-        # size says nothing about which way that parameter gives the smaller fix; the other
-        # direction of each candidate's parameter is shrunk too (raising a margin, not only
-        # lowering it until the ego races ahead)
+        # the screening decided: a screened fix sits at an end of its parameter's range or
+        # halfway to one, so its size says nothing about which way that parameter gives the
+        # smaller fix; the other direction of each candidate's parameter is shrunk too
+        # (raising a margin, not only lowering it until the ego races ahead)
         candidates += _other_directions(res, candidates, run.cfg.h1_limit_m2, originals)
     nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
     if nearest is not None:
