@@ -36,6 +36,8 @@ ENTRY_MOVING_MPS = 0.5       # [m/s] slower at its first sighting: it stood ther
 ENDPOINT_WINDOW_S = 1.0      # [s] window of the entry and exit velocity estimates
 PURSUIT_ITERATIONS = 3       # corrections of a vehicle's steered path for pure-pursuit cutting
 PURSUIT_SMOOTH_SAMPLES = 6       # half width of the moving average of the error [samples]
+PREVIEW_S = 3.0              # [s] how far ahead the profile design looks for a target it ...
+PREVIEW_MIN_S = 1.0          # [s] ... could only reach by starting now (nearer: feedback's job)
 
 
 def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
@@ -97,9 +99,12 @@ def design_profile(times: np.ndarray, s_target: np.ndarray, dt_s: float, duratio
     cmd = np.empty(k)
     v, s = float(v_d[0]), float(s_d[0])
     cmd[0] = v
+    tau = np.arange(1, int(round(PREVIEW_S / dt_s)) + 1) * dt_s
+    far = tau >= PREVIEW_MIN_S - 1e-9
     for i in range(k - 1):
         if i > 0:
             a_ref = a_d[i] + SPEED_GAIN * (v_d[i] - v) + STATION_GAIN * (s_d[i] - s)
+            a_ref = _preview(a_ref, s_d[i + 1:i + 1 + len(tau)], s, v, tau, far)
             cmd[i] = min(max(v + a_ref / SPEED_GAIN_PER_S, 0.0), MAX_SPEED_MPS)
         a = min(max(SPEED_GAIN_PER_S * (cmd[i] - v), -ACTOR_DECEL_MPS2), ACTOR_ACCEL_MPS2)
         v_new = max(v + a * dt_s, 0.0)
@@ -122,6 +127,36 @@ def design_profile(times: np.ndarray, s_target: np.ndarray, dt_s: float, duratio
         keep.append(j)
         i = j
     return tuple((round(float(tk[i]), 6), round(float(cmd[i]), 4)) for i in keep)
+
+
+def _preview(a_ref: float, s_ahead: np.ndarray, s: float, v: float, tau: np.ndarray,
+             far: np.ndarray) -> float:
+    """The acceleration [m/s^2] to command now: ``a_ref`` (feedback on the present target),
+    unless a target ahead is only reachable at the actor's acceleration (or deceleration)
+    limit from now on; then the constant acceleration that reaches the hardest one.
+
+    A target at the limit (a truck speeding up at the simulator's 2.5 m/s^2, as recorded with
+    a tracker's lag) cannot be caught up once the actor has fallen behind: feedback alone
+    starts too late and the actor stays behind by metres for good.
+
+    Args:
+        a_ref: the feedback's acceleration [m/s^2].
+        s_ahead: (m,) target arc lengths at the next m ticks [m] (fewer near the end).
+        s, v: the actor's arc length [m] and speed [m/s] now.
+        tau: (M,) time to each tick ahead [s]; far: (M,) the ticks far enough to look at.
+    """
+    m = len(s_ahead)
+    sel = far[:m]
+    if not sel.any():
+        return a_ref
+    t = tau[:m][sel]
+    need = 2.0 * (s_ahead[sel] - s - v * t) / (t * t)
+    up, down = float(need.max()), float(need.min())
+    if up >= ACTOR_ACCEL_MPS2:
+        return max(a_ref, up)
+    if down <= -ACTOR_DECEL_MPS2:
+        return min(a_ref, down)
+    return a_ref
 
 
 def _timeline(times: np.ndarray, s_core: np.ndarray, v0: float, v1: float, duration_s: float,
