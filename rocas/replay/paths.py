@@ -291,13 +291,15 @@ def actor_from_track(track: Track, lanes: tuple[Lane, ...], dt_s: float, duratio
     s_core = start_core + _progress(core, xy) if moving else np.full(len(times),
                                                                      0.25 + wheelbase)
     t_all, s_all, start = _timeline(times, s_core, v0, v1, duration_s, ahead)
+    profile = design_profile(t_all, s_all - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
     if vehicle and moving:
         # the simulator's pure pursuit cuts inside a curved path: steer along a path that
-        # is pushed out by as much, so the front axle runs where it was seen
+        # is pushed out by as much, so the front axle runs where it was seen. The speed
+        # profile stays the one along the seen path: the front axle drives that one (along
+        # the pushed-out path a left turner's speed came out 0.1 m/s too fast); only the
+        # start is the steered path's
         path = _pursuit_compensated(path, t_all, s_all, dt_s)
-        s_core = _progress(path, xy)
-        t_all, s_all, start = _timeline(times, s_core, v0, v1, duration_s, ahead)
-    profile = design_profile(t_all, s_all - start, dt_s, duration_s) if moving else ((0.0, 0.0),)
+        start = _timeline(times, _progress(path, xy), v0, v1, duration_s, ahead)[2]
     return Actor(
         id=track.name, kind=track.kind, model=track.model, color=track.color, route=(),
         waypoints=tuple((round(float(x), 4), round(float(y), 4)) for x, y in path),
