@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from rocas.errors import RecordingError, ScenarioError
+from rocas.errors import RecordingError, ScenarioError, UsageError
 from rocas.replay.lanes import project
 from rocas.replay.paths import actor_from_track
 from rocas.replay.source import RecordedRun, read_recording
@@ -22,6 +22,7 @@ from rocas.scenarios.loader import scenario_from_dict
 from rocas.scenarios.model import EGO_LENGTH_M, EGO_WIDTH_M, Ego, Scenario
 from rocas.sim.geometry import box_gap
 from rocas.sim.oracles import HARD_BRAKE_MPS2, MOVED_MPS, STANDSTILL_MPS, UNEXPECTED_STOP_S
+from rocas.stacks.base import AlphaBetaTracker
 
 #: How far (s) a track is extrapolated past its ends when naming a collision partner.
 PARTNER_EXTRAPOLATION_S = 1.0
@@ -244,7 +245,8 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
     last = float(rec.ego_times[-1]) + base.dt_s
     if meta is None or not meta.get("duration_s"):
         base = dataclasses.replace(base, duration_s=round(last, 6))
-    tracks = tuple(build_tracks(rec.detections, rec.perception_period_s, base.lanes))
+    tracks = tuple(build_tracks(rec.detections, rec.perception_period_s, base.lanes,
+                                _tracker(rec.stack, meta)))
     actors = tuple(actor_from_track(tr, base.lanes, base.dt_s, base.duration_s) for tr in tracks)
     for tr in tracks:
         notes.extend(f"{tr.name}: {n}" for n in tr.notes)
@@ -275,6 +277,24 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
                           recorded_partner=partner, notes=tuple(notes), path=rec.path,
                           warnings=tuple(warnings),
                           original_emergency_s=_emergency_before_collision(rec, kind, t))
+
+
+def _tracker(stack: str, meta: dict[str, str] | None) -> AlphaBetaTracker | None:
+    """The obstacle tracker of the stack that made the recording, with the recorded
+    parameters in force (defaults without ``rocas.ego``); None when the stack declares none."""
+    from rocas.stacks.registry import get_stack
+
+    try:
+        declare = getattr(get_stack(stack), "tracker", None)
+    except UsageError:
+        return None
+    if declare is None:
+        return None
+    try:
+        params = json.loads(meta["params"]) if meta and meta.get("params") else {}
+    except ValueError:
+        params = {}
+    return declare({str(k): float(v) for k, v in params.items()})
 
 
 def _start_mismatch(scenario: Scenario, rec: RecordedRun) -> str | None:

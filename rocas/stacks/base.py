@@ -106,9 +106,32 @@ class Stack(Protocol):
         ...
 
 
+@dataclass(frozen=True)
+class AlphaBetaTracker:
+    """A stack's obstacle tracker, when it is an alpha-beta filter publishing its state.
+
+    Each frame it predicts ``p = x + v dt`` and, on a measurement ``z``, publishes
+    ``x = p + position_gain (z - p)`` and ``v = v + velocity_gain (z - p) / dt``; a missed
+    frame is coasted (``x = p``, ``v`` unchanged). Replay undoes it (the published positions
+    lag an accelerating obstacle and a new track, whose velocity starts from rest).
+
+    Attributes:
+        position_gain: share of the innovation applied to the position (0, 1].
+        velocity_gain: share applied to the velocity, per frame (0, 1].
+        hidden_frames: frames a new track is updated before it is first published (the
+            track's velocity starts from rest at the first); only 0 and 1 can be undone.
+    """
+
+    position_gain: float
+    velocity_gain: float
+    hidden_frames: int = 1
+
+
 #: Optional, for ``rocas analyze`` on a stack's recordings: a stack may define
 #: ``read_motion(recording) -> (list[PoseRow], list[AgentRow])`` reading its own ego and
 #: perception channels from an open :class:`rocas.recording.reader.Recording` (one pass);
+#: ``tracker(params) -> AlphaBetaTracker | None``, its obstacle tracker with the parameters
+#: in force (a mapping of full names to values), which replay undoes;
 #: ``braking_limits`` / ``sensing_limits`` (parameter names) that the cyber search must not
 #: lower (a "fix" that brakes or senses less only hides the accident); and ``pace_limits`` that
 #: it must not raise (a "fix" that drives faster wins a race).

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rocas.stacks.base import ChannelSpec, ParamSpec
+from rocas.stacks.base import AlphaBetaTracker, ChannelSpec, ParamSpec
 
 if TYPE_CHECKING:
     from rocas.ads.run import AdsRun
@@ -26,6 +26,18 @@ class AdsStackAdapter:
         self.modules: tuple[str, ...] = params.MODULES
         self.parameters: tuple[ParamSpec, ...] = tuple(params.parameters())  # ads Param is ParamSpec
         self.channels: tuple[ChannelSpec, ...] = topics.CHANNELS  # ads Channel is ChannelSpec
+
+    def tracker(self, params: Mapping[str, float]) -> AlphaBetaTracker:
+        """The perception module's alpha-beta tracker with ``params`` (full names; missing
+        ones at their defaults)."""
+        from rocas.ads.perception import POSITION_GAIN
+
+        def value(name: str) -> float:
+            spec = next(p for p in self.parameters if p.full_name == name)
+            return float(params.get(name, spec.default))
+
+        return AlphaBetaTracker(POSITION_GAIN, value("perception.velocity_filter_alpha"),
+                                int(value("perception.track_min_hits")) - 1)
 
     def build(self, world: object, params: Mapping[str, np.ndarray]) -> AdsRun:
         from rocas.ads.run import AdsRun  # the one the simulator's engine drives
