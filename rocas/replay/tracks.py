@@ -35,7 +35,9 @@ STITCH_GATE_PER_S = 1.5     # [m/s] ... growing with the gap
 MAX_REIDENTIFY_S = 30.0     # [s] longest gap across which a piece is re-identified on the map
 REIDENTIFY_GATE_M = 3.0     # [m] largest distance of the later piece from the way forward
 LONG_GAP_PENALTY = 100.0    # long-gap links rank after every short-gap link
-SMOOTH_SIGMA_S = 0.25       # [s] Gaussian kernel of the smoother
+SMOOTH_SIGMA_S = 0.25       # [s] Gaussian kernel of the smoother ...
+SMOOTH_DISTANCE_M = 0.5     # [m] ... widened for slow obstacles to span this much travel ...
+SLOW_SIGMA_MAX_S = 1.0      # [s] ... up to this
 MIN_DETECTIONS = 2          # chains with fewer detections are dropped as spurious
 STATIC_SPREAD_M = 0.8       # [m] a track whose detections stay this close to their median is parked
 MOVING_SPEED_MPS = 1.0      # [m/s] above this the heading follows the velocity
@@ -240,19 +242,22 @@ def _hermite(p0: np.ndarray, v0: np.ndarray, p1: np.ndarray, v1: np.ndarray, h: 
     return h00 * p0 + h10 * h * v0 + h01 * p1 + h11 * h * v1
 
 
-def smooth(times: np.ndarray, values: np.ndarray, sigma_s: float = SMOOTH_SIGMA_S) -> np.ndarray:
+def smooth(times: np.ndarray, values: np.ndarray,
+           sigma_s: float | np.ndarray = SMOOTH_SIGMA_S) -> np.ndarray:
     """Local linear regression with a Gaussian kernel (zero phase, unbiased at the ends).
 
     Args:
         times: (n,) sample times [s].
         values: (n, D) samples.
-        sigma_s: kernel standard deviation [s].
+        sigma_s: kernel standard deviation [s], one for all samples or (n,) one each.
 
     Returns:
         (n, D) smoothed samples.
     """
     n = len(times)
-    if n < 3 or sigma_s <= 0:
+    if np.ndim(sigma_s):
+        sigma_s = np.asarray(sigma_s, dtype=np.float64)[:, None]
+    if n < 3 or np.all(sigma_s <= 0):
         return values.copy()
     dt = times[None, :] - times[:, None]                      # (n, n): sample j relative to i
     w = numerics.exp(-0.5 * (dt / sigma_s) ** 2) * (np.abs(dt) <= 3 * sigma_s)
@@ -266,6 +271,24 @@ def smooth(times: np.ndarray, values: np.ndarray, sigma_s: float = SMOOTH_SIGMA_
     lw[flat] = w[flat] / s0[flat, None]
     # no BLAS (its kernel would change the sum's order): one fixed-order row sum per column
     return np.stack([(lw * values[:, d]).sum(axis=1) for d in range(values.shape[1])], axis=1)
+
+
+def slow_sigma(times: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(n,) smoother kernel [s] per sample: :data:`SMOOTH_SIGMA_S`, widened for a slow
+    obstacle to span :data:`SMOOTH_DISTANCE_M` of its travel (at most
+    :data:`SLOW_SIGMA_MAX_S`).
+
+    Position noise over a fixed time is a large speed error for a slow obstacle: a car
+    creeping at 0.35 m/s was tracked at 0.2-0.5 m/s, every second.
+
+    Args:
+        times: (n,) uniform sample times [s]; xy: (n, 2) positions, once smoothed [m].
+    """
+    if len(times) < 3:
+        return np.full(len(times), SMOOTH_SIGMA_S)
+    vel = np.gradient(xy, times, axis=0)
+    speed = smooth(times, np.hypot(vel[:, 0], vel[:, 1])[:, None], 2 * SMOOTH_SIGMA_S)[:, 0]
+    return np.clip(SMOOTH_DISTANCE_M / np.maximum(speed, 1e-3), SMOOTH_SIGMA_S, SLOW_SIGMA_MAX_S)
 
 
 def two_sided(times: np.ndarray, observed: np.ndarray, sigma_s: float = SMOOTH_SIGMA_S
@@ -476,7 +499,10 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = (),
             # turning at 6.5 m/s on an 11.5 m radius), twicing is exact for quadratic motion;
             # near a track's ends and gaps it would double the one-sided fit's noise
             once = smooth(grid, xy)
-            xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once)
+            sigma = slow_sigma(grid, once)
+            if np.any(sigma > SMOOTH_SIGMA_S):
+                once = smooth(grid, xy, sigma)
+            xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once, sigma)
             vel = np.gradient(xy, grid, axis=0)
             speed = np.hypot(vel[:, 0], vel[:, 1])
             heading = np.where(speed > MOVING_SPEED_MPS, numerics.arctan2(vel[:, 1], vel[:, 0]),
