@@ -21,7 +21,7 @@ def add_search_arguments(p: argparse.ArgumentParser,
     :class:`rocas.pipeline.config.AnalyzeConfig`); ``seeded`` says what --seed seeds."""
     p.add_argument("--seed", type=int, default=0, help=f"seed of {seeded} (default 0)")
     p.add_argument("--budget", type=int, default=240,
-                   help="simulations per search phase; the cyber phase's screening (up to two per "
+                   help="simulations per search phase; the cyber phase's screening (up to four per "
                         "parameter) comes out of it, but at least one generation of new mutants "
                         "follows (default 240)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")

@@ -49,22 +49,31 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
 
 def second_suspect(run: Run, module: str | None) -> str | None:
     """The module whose parameters are searched when no configuration of ``module`` avoids the
-    accident: the module module substitution names (its ground truth alone avoids the
-    accident), when that is another module and the search was over one module (``--scope
-    module``); else None.
+    accident (``--scope module`` only; None when there is none):
 
-    Algorithm 1's module can be the wrong one in a way only the fix search shows: a creeping
-    car whose forecast differs from its first message in the reference has no change point,
-    and the walk ends at planning (a T-junction variant of A1). No planning parameter avoids
-    the accident; substitution says ground-truth prediction does, and prediction's
-    still-obstacle speed is the repair. Accidents no configuration can avoid (A7's car from
-    behind, A8's hedge) have no such module: substitution avoids nothing there."""
+    - the module module substitution names (its ground truth alone avoids the accident), when
+      that is another module. Algorithm 1's module can be the wrong one in a way only the fix
+      search shows: a creeping car whose forecast differs from its first message in the
+      reference has no change point, and the walk ends at planning (a T-junction variant of
+      A1). No planning parameter avoids the accident; substitution says ground-truth
+      prediction does, and prediction's still-obstacle speed is the repair.
+    - the module that reads ``module``'s output on the walk's path, when substitution names
+      ``module`` itself: its perfect output would avoid the accident, no configuration of it
+      does, so the repair is a margin of its consumer for the errors it cannot help (planning's
+      margins for the forecast: a right-turning truck whose forecast cut the corner, a layout
+      variant of A11).
+
+    Accidents no configuration can avoid (A7's car from behind, A8's hedge) have no second
+    suspect: substitution avoids nothing there."""
     opinion = ((run.state["done"].get("confidence") or {}).get("second_opinion") or {})
     suspect = opinion.get("module")
-    if (module is None or run.cfg.scope != "module" or not opinion.get("accident")
-            or suspect in (None, module)):
+    if module is None or run.cfg.scope != "module" or not opinion.get("accident") or suspect is None:
         return None
-    return suspect
+    if suspect != module:
+        return suspect
+    path = list((run.state["done"].get("diff") or {}).get("path") or [])
+    i = path.index(module) if module in path else -1
+    return path[i - 2] if i >= 2 else None
 
 
 def _report_suspect(run: Run, named: str, suspect: str) -> None:
@@ -73,13 +82,17 @@ def _report_suspect(run: Run, named: str, suspect: str) -> None:
     at most contested (substitution supports it, the references do not)."""
     done = run.state["done"]
     diff = done["diff"]
-    done["diff"] = {**diff, "deviating_module": suspect, "path": [], "walk_named": named}
+    consumer = suspect != ((done.get("confidence") or {}).get("second_opinion") or {}).get("module")
+    done["diff"] = {**diff, "deviating_module": suspect, "path": [], "walk_named": named,
+                    "suspect_reads_named": consumer}
     conf = done.get("confidence")
     if conf:
         conf["level"] = "contested"
+        why = (f"{suspect}, which reads its output (substitution names {named} itself)"
+               if consumer else f"{suspect}, the module substitution names")
         conf["note"] = (conf["note"].rstrip(".") + f"; no configuration of {named} avoids the "
-                        f"accident, so the parameters of {suspect}, the module substitution "
-                        f"names, were searched and its fix is reported (at most contested).")
+                        f"accident, so the parameters of {why}, were searched and its fix is "
+                        f"reported (at most contested).")
 
 
 def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[str, Any], int]:

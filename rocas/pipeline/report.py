@@ -25,6 +25,14 @@ EXPLANATIONS = {
         "from module {module} it does not happen, and changing {params} in that module avoids it "
         "while the ego drives as before until {horizon:.1f} s: the accident is attributed to this "
         "configuration."),
+    # the fix was found in the module that reads the walk's module's output
+    # (cyber_phase.second_suspect: substitution named the walk's module itself)
+    "misconfiguration_consumer": (
+        "Changing {entity_phrase} avoids the accident, and the two executions first diverge in "
+        "module {walk_named}; with ground truth from it the accident does not happen, but no "
+        "configuration of it avoids the accident. Changing {params} in module {module}, which "
+        "reads its output, avoids it while the ego drives as before until {horizon:.1f} s: the "
+        "accident is attributed to this configuration (a margin for errors of {walk_named})."),
     "no_reference": (
         "No small change of the world within the search budget avoids the accident, so there is no "
         "accident-free reference execution to compare with; the analysis stops here. A larger "
@@ -80,8 +88,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         # why the walk went on past Algorithm 1's window toward the module substitution names
         "window_passed": diff.get("window_passed"),
         # the module Algorithm 1's walk named when no configuration of it avoided the accident
-        # and the fix was found in the module module substitution names
+        # and the fix was found in the module module substitution names, or (when substitution
+        # named the walk's module itself) in the module that reads its output
         "walk_named": diff.get("walk_named"),
+        "suspect_reads_named": bool(diff.get("suspect_reads_named")),
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
@@ -112,8 +122,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     scope = f"module {module}" if cyber.get("scope") == "module" and module else "the whole ADS"
     if suspect:
         scope += f" nor of module {suspect} (the module module substitution names)"
-    template = ("misconfiguration_second_suspect"
-                if verdict == "misconfiguration" and diff.get("walk_named") else verdict)
+    template = verdict
+    if verdict == "misconfiguration" and diff.get("walk_named"):
+        template = ("misconfiguration_consumer" if diff.get("suspect_reads_named")
+                    else "misconfiguration_second_suspect")
     report["explanation"] = EXPLANATIONS[template].format(
         entity_phrase=entity_phrase, module=module, module_or_none=module or "(none found)",
         params=params or "-", horizon=max(horizon, 0.0), scope=scope,
@@ -138,6 +150,10 @@ def entries_passed_text(report: dict[str, Any]) -> str:
 
 def walk_named_text(report: dict[str, Any]) -> str:
     """Why the deviating module is not the one Algorithm 1's walk named (one clause)."""
+    if report.get("suspect_reads_named"):
+        return (f"Algorithm 1's walk and module substitution named {report['walk_named']}, but no "
+                f"configuration of it avoids the accident; {report['deviating_module']} reads its "
+                "output, and its parameters hold the fix")
     return (f"Algorithm 1's walk named {report['walk_named']}, but no configuration of it avoids "
             f"the accident; module substitution names {report['deviating_module']}, whose "
             "parameters hold the fix")
@@ -148,7 +164,7 @@ def cleared_passed_text(report: dict[str, Any]) -> str:
     cleared = " and ".join(report["cleared_passed"])
     return (f"the walk went on past {cleared}: with its ground truth the accident still "
             f"happens, while another module's ground truth avoids it; past it, the walk names "
-            f"{report['deviating_module'] or 'no module'}")
+            f"{report.get('walk_named') or report['deviating_module'] or 'no module'}")
 
 
 def _nothing_recorded(replay: dict[str, Any], accident: Any) -> bool:

@@ -108,3 +108,20 @@ def test_a_fix_in_the_second_suspect_says_which_module_the_walk_named():
                               "second_suspect": {"module": "prediction", "parameters": 18}}
     report = build_report(state, None, "no_configuration_fix")
     assert "module planning nor of module prediction" in report["explanation"]
+
+
+def test_a_fix_in_the_module_reading_the_walks_module_says_so():
+    state = _state({"reproduced": True, "ego_rmse_m": 0.01})
+    state["done"] |= {
+        "diff": {"deviating_module": "planning", "path": [], "walk_named": "prediction",
+                 "suspect_reads_named": True},
+        "cyber": {"scope": "module", "parameters": 42, "named_module": "prediction",
+                  "fix": {"planning.collision_check_moving_m": 1.3},
+                  "misconfiguration": [{"module": "planning",
+                                        "parameter": "planning.collision_check_moving_m",
+                                        "original": 0.5, "mutated": 1.3}]}}
+    report = build_report(state, None, "misconfiguration")
+    assert report["deviating_module"] == "planning" and report["suspect_reads_named"] is True
+    assert "with ground truth from it the accident does not happen" in report["explanation"]
+    assert "in module planning, which reads its output" in report["explanation"]
+    assert "walk and module substitution named prediction" in markdown(report)
