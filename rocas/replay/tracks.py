@@ -494,15 +494,21 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = (),
             h2 = 2.0 * d.heading[rows]
             heading = np.full(len(grid), 0.5 * numerics.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
         else:
-            # twiced where detections surround a sample (the residual smoothed and added back):
-            # a local linear fit cuts a turn's corner by a sigma^2 / 2 (0.1 m for a car
-            # turning at 6.5 m/s on an 11.5 m radius), twicing is exact for quadratic motion;
-            # near a track's ends and gaps it would double the one-sided fit's noise
+            # a vehicle's twiced where detections surround a sample (the residual smoothed and
+            # added back): a local linear fit cuts a turn's corner by a sigma^2 / 2 (0.1 m for
+            # a car turning at 6.5 m/s on an 11.5 m radius), twicing is exact for quadratic
+            # motion; near a track's ends and gaps it would double the one-sided fit's noise.
+            # Cyclists and pedestrians turn gently at their speeds and are detected no better:
+            # twiced, the LAV-like stack's unrecognised cyclist (l04) put the replayed ego
+            # 0.36 m RMS off instead of 0.26 m
             once = smooth(grid, xy)
             sigma = slow_sigma(grid, once)
             if np.any(sigma > SMOOTH_SIGMA_S):
                 once = smooth(grid, xy, sigma)
-            xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once, sigma)
+            if kind == "vehicle":
+                xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once, sigma)
+            else:
+                xy = once
             vel = np.gradient(xy, grid, axis=0)
             speed = np.hypot(vel[:, 0], vel[:, 1])
             heading = np.where(speed > MOVING_SPEED_MPS, numerics.arctan2(vel[:, 1], vel[:, 0]),
