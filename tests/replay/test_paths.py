@@ -39,6 +39,26 @@ def test_designed_profile_follows_an_accelerating_target():
     assert len(prof) < len(t)  # knots on straight stretches are dropped
 
 
+
+def test_a_target_beyond_the_acceleration_limit_is_met_by_looking_ahead(monkeypatch):
+    """A truck recorded speeding up at 3.5 m/s^2 for a second, then at the simulator's limit
+    of 2.5 m/s^2 (a tracker catching up with it records such a stretch): once the actor falls
+    behind it cannot catch up, so the profile must start accelerating when a target ahead needs
+    it, not when the present error does."""
+    import rocas.replay.paths as paths
+
+    dt, dur = 0.05, 8.0
+    t = np.arange(0.0, dur + 1.0, 0.1)
+    acc = np.where((t > 1.0) & (t < 2.0), 3.5, np.where(t >= 2.0, ACTOR_ACCEL_MPS2, 0.0))
+    v = np.minimum(8.0 + np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * 0.1)]),
+                   18.0)
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * 0.1)])
+    want = np.interp(np.arange(int(dur / dt) + 1) * dt, t, s)
+    ahead = np.max(np.abs(_drive(design_profile(t, s, dt, dur), dt, int(dur / dt)) - want))
+    monkeypatch.setattr(paths, "PREVIEW_MIN_S", 1e9)     # feedback on the present target only
+    feedback = np.max(np.abs(_drive(design_profile(t, s, dt, dur), dt, int(dur / dt)) - want))
+    assert ahead < 0.75 and feedback > 2.0               # measured: 0.54 m against 2.88 m
+
 def test_walking_the_map_back_and_forth():
     lanes = load_example("left_turn_oncoming").lanes
     by_id = {ln.id: ln for ln in lanes}

@@ -111,3 +111,67 @@ def test_bridge_between_pieces_follows_the_detections_not_the_trackers_velocity(
     true = np.array([_truck(float(t))[1] for t in tr.times[gap]])
     assert np.all(np.diff(tr.speed[gap]) > 0.0)       # it keeps speeding up
     assert np.max(np.abs(tr.speed[gap] - true)) < 1.5
+
+
+def _alpha_beta(z: np.ndarray, missed: set[int], a: float, b: float, dt: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The built-in ADS's tracker on measurements ``z`` (n, 2), as rocas.ads.perception runs
+    it: a new track starts at the measurement at rest, later frames are corrected by gains
+    ``a`` (position) and ``b`` (velocity), missed frames coast. Returns the published frames
+    (the first update on: one hidden frame) as (indices, positions, velocities)."""
+    x, v = z[0].copy(), np.zeros(2)
+    idx, xs, vs = [], [], []
+    for k in range(1, len(z)):
+        pred = x + v * dt
+        if k in missed:
+            x = pred
+        else:
+            r = z[k] - pred
+            x, v = pred + a * r, v + b * r / dt
+        idx.append(k), xs.append(x.copy()), vs.append(v.copy())
+    return np.array(idx), np.array(xs), np.array(vs)
+
+
+def test_the_alpha_beta_trackers_lag_is_undone_and_its_coasted_frames_found():
+    from rocas.replay.tracks import measured, undo_alpha_beta
+    from rocas.stacks.base import AlphaBetaTracker
+
+    dt, n = 0.1, 40
+    t = np.round(np.arange(n) * dt, 6)
+    z = np.stack([4.5 * t + 0.5 * 2.5 * t ** 2, 0.3 * np.sin(t)], axis=1)  # accelerating
+    tracker = AlphaBetaTracker(position_gain=0.6, velocity_gain=0.1, hidden_frames=1)
+    idx, xs, vs = _alpha_beta(z, {20, 21}, 0.6, 0.1, dt)
+    rows = [(t[k], 7, x[0], x[1], 0.0, v[0], v[1], 4.6, 1.9, 1.5, 5, 3)
+            for k, x, v in zip(idx, xs, vs)]
+    d = _detections(rows, ["red"] * len(rows))
+    order = np.arange(len(rows))
+    assert np.abs(xs - z[idx]).max() > 0.3           # the published track lags the car
+    keep = measured(d, order)
+    assert set(idx[~keep].tolist()) == {20, 21}       # exactly the coasted frames
+    back = undo_alpha_beta(d, order, tracker, dt)
+    assert np.allclose(back[keep], z[idx][keep], atol=1e-9)
+
+
+def test_the_built_in_stack_declares_its_tracker_with_the_recorded_parameters():
+    from rocas.ads.perception import POSITION_GAIN
+    from rocas.stacks.registry import get_stack
+
+    declare = get_stack("ads").tracker
+    assert declare({}) == type(declare({}))(POSITION_GAIN, 0.1, 1)   # the defaults
+    tr = declare({"perception.velocity_filter_alpha": 0.25, "perception.track_min_hits": 3.0})
+    assert (tr.velocity_gain, tr.hidden_frames) == (0.25, 2)
+
+
+def test_slow_obstacles_get_a_wider_kernel_and_twicing_needs_detections_on_both_sides():
+    from rocas.replay.tracks import SLOW_SIGMA_MAX_S, SMOOTH_SIGMA_S, slow_sigma, two_sided
+
+    t = np.round(np.arange(0.0, 6.0, 0.1), 6)
+    fast = np.stack([10.0 * t, np.zeros_like(t)], axis=1)
+    creeping = np.stack([0.35 * t, np.zeros_like(t)], axis=1)
+    assert np.allclose(slow_sigma(t, fast), SMOOTH_SIGMA_S)
+    assert np.allclose(slow_sigma(t, creeping)[10:-10], SLOW_SIGMA_MAX_S)
+    seen = np.ones(len(t), dtype=bool)
+    seen[30:40] = False                                # a 1 s gap
+    w = two_sided(t, seen)
+    assert np.allclose(w[10:20], 1.0) and w[0] == 0.0 and w[-1] == 0.0
+    assert w[29] < 0.5 and w[40] < 0.5                 # one side of the gap is empty
