@@ -394,7 +394,7 @@ def diff(
             # the departure), which the window can then see
             nz = np.flatnonzero(s.mdr > 0)
             base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
-            if len(nz) and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
+            if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
                 t_star[topic] = t_after[topic] = float(s.times_s[nz[0]])
         entry = entries.get(topic)
         after = None if entry is None else change_points_from(s, cfg, entry)

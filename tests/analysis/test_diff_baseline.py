@@ -19,7 +19,7 @@ diff_module = importlib.import_module("rocas.analysis.diff")
 
 def _run(path, offset, *, differs_at=2.0):
     """prediction -> /prediction -> planning -> /planning -> control -> /control. /prediction
-    carries a wobbling value shifted by ``offset`` from the first message on; /planning and
+    carries a wobbling value shifted by ``offset`` from the second message on; /planning and
     /control take ``offset`` from ``differs_at`` s on."""
     with RecordingWriter(path) as w:
         w.add_channel("/prediction", control_pb2.ControlCommand, writers=["prediction"],
@@ -29,8 +29,9 @@ def _run(path, offset, *, differs_at=2.0):
         w.add_channel("/control", control_pb2.ControlCommand, writers=["control"], role="control")
         for i in range(TICKS):
             t, ns = i / 10, i * S // 10
-            wobble = 0.05 * math.sin(1.7 * i) * (1.0 + offset)
-            w.write("/prediction", control_pb2.ControlCommand(throttle=0.3 + offset + wobble),
+            shift = offset if i > 0 else 0.0  # both runs start alike
+            wobble = 0.05 * math.sin(1.7 * i) * (1.0 + shift)
+            w.write("/prediction", control_pb2.ControlCommand(throttle=0.3 + shift + wobble),
                     log_time_ns=ns)
             later = offset if t >= differs_at - 1e-9 else 0.0
             w.write("/planning", control_pb2.ControlCommand(throttle=0.2 + later), log_time_ns=ns)
