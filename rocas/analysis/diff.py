@@ -228,6 +228,12 @@ class DiffResult:
         }
 
 
+
+#: a channel without change points whose mean MDR is this many noise deviations above zero
+#: has departed at its first differing bin
+BASELINE_DEPARTURE_SIGMAS = 3.0
+
+
 def _means(values: np.ndarray, cps: ChangePoints) -> tuple[float | None, float | None]:
     if len(values) == 0:
         return None, None
@@ -382,6 +388,14 @@ def diff(
     for topic, s in res.series.items():
         cps = detect(s.mdr, s.times_s, cfg)
         t_star[topic] = t_after[topic] = cps.first_s
+        if cps.first_s is None and topic != ctrl:
+            # no change point, but a difference from the first bin on that stands well above
+            # the channel's noise: it departed at its first differing bin (its baseline holds
+            # the departure), which the window can then see
+            nz = np.flatnonzero(s.mdr > 0)
+            base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
+            if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
+                t_star[topic] = t_after[topic] = float(s.times_s[nz[0]])
         entry = entries.get(topic)
         after = None if entry is None else change_points_from(s, cfg, entry)
         if after is not None:
