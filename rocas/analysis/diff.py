@@ -228,7 +228,6 @@ class DiffResult:
         }
 
 
-
 #: a channel without change points whose mean MDR is this many noise deviations above zero
 #: has departed at its first differing bin
 BASELINE_DEPARTURE_SIGMAS = 3.0
@@ -389,9 +388,10 @@ def diff(
         cps = detect(s.mdr, s.times_s, cfg)
         t_star[topic] = t_after[topic] = cps.first_s
         if cps.first_s is None and topic != ctrl:
-            # no change point, but a difference from the first bin on that stands well above
-            # the channel's noise: it departed at its first differing bin (its baseline holds
-            # the departure), which the window can then see
+            # no change point, but the runs start alike and then differ well above the
+            # channel's noise: it departed at its first differing bin (its baseline holds the
+            # departure), which the window can then see; a pair noisy from its first bin on
+            # (another stack's sensors) is left alone
             nz = np.flatnonzero(s.mdr > 0)
             base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
             if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:

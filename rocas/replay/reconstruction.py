@@ -290,10 +290,8 @@ def _tracker(stack: str, meta: dict[str, str] | None) -> AlphaBetaTracker | None
         return None
     if declare is None:
         return None
-    try:
-        params = json.loads(meta["params"]) if meta and meta.get("params") else {}
-    except ValueError:
-        params = {}
+    # malformed params were refused already, when the ego's record was read
+    params = json.loads(meta["params"]) if meta and meta.get("params") else {}
     return declare({str(k): float(v) for k, v in params.items()})
 
 
