@@ -18,7 +18,7 @@ from typing import Any
 
 from rocas.pipeline.confidence import phase_confidence, start_second_opinion
 from rocas.pipeline.config import AnalyzeConfig
-from rocas.pipeline.cyber_phase import phase_cyber
+from rocas.pipeline.cyber_phase import phase_cyber, start_screening
 from rocas.pipeline.diff_phase import phase_diff
 from rocas.pipeline.physical_phase import phase_physical
 from rocas.pipeline.replay_phase import phase_replay
@@ -120,6 +120,8 @@ def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dic
         return write_report(run.out, build_report(run.state, run.accident, "no_reference"))
     run.progress("diff", {})
     phase_diff(run)
+    # the screening of the diff's module runs on a worker while the confidence phase runs here
+    start_screening(run, run.state["done"]["diff"]["deviating_module"])
     run.progress("confidence", {})
     phase_confidence(run)  # may adopt the references' majority: read the diff's summary after it
     diff = run.state["done"]["diff"]

@@ -47,6 +47,40 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     return result
 
 
+def start_screening(run: Run, module: str | None) -> None:
+    """Start the cyber search's screening of ``module``'s parameters on the executor's workers
+    (``run.ahead["cyber_screening"]``: its tasks and the futures of their batches) while the
+    confidence phase runs in this process. The screening's mutants follow from the parameter
+    space and the seed alone, so the search takes these results for its first batch when it
+    asks for exactly these tasks; when the confidence phase makes another module the deviating
+    one, the search asks for other tasks and this work is left unused (it ran on a core that
+    would have been idle). Nothing is started with one worker, without screening, or for a
+    search already under way (a checkpoint to resume from), nor when the diff names no module
+    (the confidence phase then most often adopts another reference's, and the search over
+    every module's parameters would be large)."""
+    from rocas.pipeline.evaluate import batches_of, run_batch
+    from rocas.search.executor import submit
+    from rocas.search.ga import screening_genomes
+
+    workers = max(1, getattr(run.executor, "workers", 1))
+    if (module is None or workers == 1 or getattr(run.executor, "submit", None) is None
+            or run.done("cyber") or (run.out / "cyber.ckpt").exists()):
+        return
+    scn = run.scenario
+    assert scn is not None
+    space = run.cyber_space(module)
+    search = run.cfg.search(2, len(space.variables))
+    if not search.screen:
+        return
+    mutations = list(dict.fromkeys(m for m in (space.decode(g) for g in
+                                               screening_genomes(space, search.seed)) if m.values))
+    tasks = [VariantTask(scn, params_tuple({k: float(v) for k, v in m.values.items()}), scn.seed)
+             for m in mutations]
+    if tasks:
+        run.ahead["cyber_screening"] = (tasks, [submit(run.executor, run_batch, b) for b in
+                                                batches_of(tasks, run.cfg.batch_size, workers)])
+
+
 def second_suspect(run: Run, module: str | None) -> str | None:
     """The module whose parameters are searched when no configuration of ``module`` avoids the
     accident (``--scope module`` only; None when there is none):
@@ -111,6 +145,9 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
 
     def run_fixes(ms: list[Mutation]) -> list[VariantResult]:
         tasks = [VariantTask(scn, overrides(m), scn.seed) for m in ms]
+        ahead = run.ahead.pop("cyber_screening", None)
+        if ahead is not None and ahead[0] == tasks:  # the screening, started on a worker
+            return [r for f in ahead[1] for r in f.result()]
         return evaluate(run.executor, tasks, run.cfg.batch_size)
 
     # each simulated fix's smallest gap to anything [m] and path length driven [m], for

@@ -115,12 +115,7 @@ def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int =
     if not tasks:
         record(recordings)
         return []
-    count = -(-len(tasks) // max(1, batch_size))
-    workers = max(1, getattr(executor, "workers", 1))
-    if count > 1 or (workers > 1 and len(tasks) >= workers * PARALLEL_MIN_BATCH):
-        count = min(len(tasks), -(-count // workers) * workers)
-    size = -(-len(tasks) // count)
-    batches = [tasks[i:i + size] for i in range(0, len(tasks), size)]
+    batches = batches_of(tasks, batch_size, max(1, getattr(executor, "workers", 1)))
     out: list[VariantResult] = []
     if recordings:
         jobs = [(b, [(t, os.fspath(p)) for t, p in recordings] if i == 0 else [])
@@ -131,6 +126,15 @@ def evaluate(executor: Executor, tasks: Sequence[VariantTask], batch_size: int =
     for chunk in chunks:
         out.extend(chunk)
     return out
+
+
+def batches_of(tasks: list[VariantTask], batch_size: int, workers: int) -> list[list[VariantTask]]:
+    """How :func:`evaluate` groups ``tasks`` (at least one) into batches for ``workers``."""
+    count = -(-len(tasks) // max(1, batch_size))
+    if count > 1 or (workers > 1 and len(tasks) >= workers * PARALLEL_MIN_BATCH):
+        count = min(len(tasks), -(-count // workers) * workers)
+    size = -(-len(tasks) // count)
+    return [tasks[i:i + size] for i in range(0, len(tasks), size)]
 
 
 def prepare_worker() -> None:

@@ -118,3 +118,85 @@ def test_no_module_reads_the_walks_module_on_its_path_no_second_search(tmp_path,
     run = _Run(tmp_path, PREDICTION, path=path)
     result = cyber_phase.phase_cyber(run, "prediction")
     assert calls == [("prediction", "cyber.ckpt")] and "fix" not in result
+
+
+class _Pool:
+    """A two-worker executor that runs everything here and records what it was given:
+    ``mapped`` the batch sizes of each map, ``submitted`` the batch sizes submitted."""
+
+    name = "pool"
+    workers = 2
+
+    def __init__(self):
+        self.mapped, self.submitted = [], []
+
+    def map(self, fn, tasks):
+        self.mapped.append([len(t) for t in tasks])
+        return [fn(t) for t in tasks]
+
+    def submit(self, fn, *args):
+        from rocas.search.executor import done_future
+
+        self.submitted.append(len(args[0]))
+        return done_future(fn, *args)
+
+    def close(self):
+        pass
+
+
+def _short_run(tmp_path, executor):
+    """A run of a three-second A9 whose cyber search is small (budget 40)."""
+    import dataclasses
+
+    from rocas.pipeline.config import AnalyzeConfig
+    from rocas.pipeline.evaluate import VariantTask, run_batch
+    from rocas.pipeline.rundir import Run, noop
+    from rocas.scenarios.catalog import entries
+
+    scn = dataclasses.replace(next(e for e in entries() if e.id == "A9").scenario, duration_s=3.0)
+    run = Run(tmp_path, AnalyzeConfig(budget=40, population=8), executor, noop,
+              {"done": {}, "timings_s": {}, "evaluations": {}})
+    run.scenario = scn
+    run.original = run_batch([VariantTask(scn, (), scn.seed)])[0]
+    run.accident_tick = 25
+    return run
+
+
+def test_the_screening_started_ahead_is_the_searchs_first_batch(tmp_path):
+    """start_screening runs the cyber search's screening on a worker; the search then takes
+    those results instead of simulating its first batch, and finds what it finds without."""
+    ahead_pool, plain_pool = _Pool(), _Pool()
+    ahead = _short_run(tmp_path / "a", ahead_pool)
+    (tmp_path / "a").mkdir()
+    cyber_phase.start_screening(ahead, "perception")
+    assert ahead_pool.submitted and "cyber_screening" in ahead.ahead
+    got, n_got = cyber_phase._search_fix(ahead, "perception", tmp_path / "a" / "cyber.ckpt")
+    assert "cyber_screening" not in ahead.ahead
+    plain = _short_run(tmp_path / "p", plain_pool)
+    (tmp_path / "p").mkdir()
+    want, n_want = cyber_phase._search_fix(plain, "perception", tmp_path / "p" / "cyber.ckpt")
+    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(want, sort_keys=True, default=str)
+    assert n_got == n_want
+    # the plain search simulated the screening itself, as its first batch; the other did not
+    assert sum(ahead_pool.submitted) == sum(plain_pool.mapped[0])
+    assert plain_pool.mapped[1:] == ahead_pool.mapped
+
+
+def test_a_screening_of_another_module_is_left_unused(tmp_path):
+    pool = _Pool()
+    run = _short_run(tmp_path, pool)
+    cyber_phase.start_screening(run, "planning")
+    cyber_phase._search_fix(run, "perception", tmp_path / "cyber.ckpt")
+    assert "cyber_screening" not in run.ahead
+    plain = _Pool()
+    cyber_phase._search_fix(_short_run(tmp_path / "p", plain), "perception", tmp_path / "p.ckpt")
+    assert pool.mapped == plain.mapped  # the search simulated its own screening
+
+
+def test_nothing_is_started_with_one_worker_or_without_a_module(tmp_path):
+    pool = _Pool()
+    run = _short_run(tmp_path, pool)
+    cyber_phase.start_screening(run, None)
+    pool.workers = 1
+    cyber_phase.start_screening(run, "perception")
+    assert run.ahead == {} and pool.submitted == []
