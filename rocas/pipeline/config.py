@@ -139,9 +139,9 @@ def screening_simulations(space: MutationSpace, seed: int) -> int:
     """How many simulations the screening of ``space`` runs: up to four per parameter (two for
     a bool or an enum), less a value that is the parameter's value in force (an end of its
     range, or a halfway point of an integer: no change, nothing to simulate)."""
-    from rocas.search.ga import screening_genomes
+    from rocas.search.ga import screening_mutations
 
-    return len({m for m in (space.decode(g) for g in screening_genomes(space, seed)) if m.values})
+    return len(screening_mutations(space, seed))
 
 
 

@@ -13,9 +13,19 @@ import numpy as np
 from rocas._fs import write_text_atomic
 from rocas.pipeline.common import Scores, cand_json, gen_info, gen_json
 from rocas.pipeline.config import planned_simulations, screening_simulations
-from rocas.pipeline.evaluate import VariantResult, VariantTask, evaluate, params_tuple, violation
+from rocas.pipeline.evaluate import (
+    VariantResult,
+    VariantTask,
+    batches_of,
+    evaluate,
+    params_tuple,
+    run_batch,
+    violation,
+)
 from rocas.pipeline.rundir import Run, jsonable
-from rocas.search.ga import Candidate, SearchResult, run_search
+from rocas.scenarios.model import Scenario
+from rocas.search.executor import submit
+from rocas.search.ga import Candidate, SearchResult, run_search, screening_mutations
 from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
 from rocas.search.objectives import ego_dissimilarity
 from rocas.search.space import Mutation
@@ -47,6 +57,12 @@ def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
     return result
 
 
+def fix_tasks(scenario: Scenario, fixes: list[Mutation]) -> list[VariantTask]:
+    """The accident ``scenario`` run once with each fix's parameter values."""
+    return [VariantTask(scenario, params_tuple({k: float(v) for k, v in m.values.items()}),
+                        scenario.seed) for m in fixes]
+
+
 def start_screening(run: Run, module: str | None) -> None:
     """Start the cyber search's screening of ``module``'s parameters on the executor's workers
     (``run.ahead["cyber_screening"]``: its tasks and the futures of their batches) while the
@@ -58,10 +74,6 @@ def start_screening(run: Run, module: str | None) -> None:
     search already under way (a checkpoint to resume from), nor when the diff names no module
     (the confidence phase then most often adopts another reference's, and the search over
     every module's parameters would be large)."""
-    from rocas.pipeline.evaluate import batches_of, run_batch
-    from rocas.search.executor import submit
-    from rocas.search.ga import screening_genomes
-
     workers = max(1, getattr(run.executor, "workers", 1))
     if (module is None or workers == 1 or getattr(run.executor, "submit", None) is None
             or run.done("cyber") or (run.out / "cyber.ckpt").exists()):
@@ -72,10 +84,7 @@ def start_screening(run: Run, module: str | None) -> None:
     search = run.cfg.search(2, len(space.variables))
     if not search.screen:
         return
-    mutations = list(dict.fromkeys(m for m in (space.decode(g) for g in
-                                               screening_genomes(space, search.seed)) if m.values))
-    tasks = [VariantTask(scn, params_tuple({k: float(v) for k, v in m.values.items()}), scn.seed)
-             for m in mutations]
+    tasks = fix_tasks(scn, screening_mutations(space, search.seed))
     if tasks:
         run.ahead["cyber_screening"] = (tasks, [submit(run.executor, run_batch, b) for b in
                                                 batches_of(tasks, run.cfg.batch_size, workers)])
@@ -140,11 +149,8 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
     run.progress("cyber", {"planned": planned_simulations(search, screening)})
     horizon = run.h1_horizon
 
-    def overrides(m: Mutation) -> tuple[tuple[str, float], ...]:
-        return params_tuple({k: float(v) for k, v in m.values.items()})
-
     def run_fixes(ms: list[Mutation]) -> list[VariantResult]:
-        tasks = [VariantTask(scn, overrides(m), scn.seed) for m in ms]
+        tasks = fix_tasks(scn, ms)
         ahead = run.ahead.pop("cyber_screening", None)
         if ahead is not None and ahead[0] == tasks:  # the screening, started on a worker
             return [r for f in ahead[1] for r in f.result()]

@@ -292,13 +292,19 @@ def screening_genomes(space: MutationSpace, seed: int) -> np.ndarray:
     return np.array(out).reshape(len(out), space.n_genes)
 
 
+def screening_mutations(space: MutationSpace, seed: int) -> list[Mutation]:
+    """The distinct mutations the screening simulates, in its order: the screening genomes
+    (:func:`screening_genomes`) decoded, less those that change nothing (a value that is
+    already the parameter's)."""
+    return list(dict.fromkeys(m for m in (space.decode(g) for g in screening_genomes(space, seed))
+                              if m.values))
+
+
 def _screen(space: MutationSpace, evaluate: BatchEvaluate, cfg: SearchConfig, state: _State,
             on_generation: Callable[[GenerationStats], None] | None) -> np.ndarray:
     """Simulate the screening genomes (:func:`screening_genomes`; candidates of generation 0)
     and return the first population of the genetic search: the best screened."""
-    genomes = screening_genomes(space, cfg.seed)
-    mutations = [space.decode(g) for g in genomes]
-    todo = list(dict.fromkeys(m for m in mutations if m.values and m not in state.cache))
+    todo = [m for m in screening_mutations(space, cfg.seed) if m not in state.cache]
     for m, ev in zip(todo, evaluate(todo), strict=True):
         state.cache[m] = ev
         state.candidates.append(Candidate(m, tuple(ev[0]), float(ev[1]), 0))

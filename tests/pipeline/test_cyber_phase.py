@@ -9,7 +9,6 @@ import pytest
 
 from rocas.pipeline import cyber_phase
 
-
 WALK_TO_PLANNING = ("/control", "control", "/planning", "planning")
 WALK_TO_PREDICTION = (*WALK_TO_PLANNING, "/prediction", "prediction")
 
