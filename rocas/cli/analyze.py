@@ -308,6 +308,7 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
         cleared_passed_text,
         confidence_text,
         entries_passed_text,
+        other_fix_text,
         regression_text,
         replay_text,
         robust_text,
@@ -353,6 +354,8 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     for alt in report.get("alternatives", []):
         t.add_row("nearly as small", ", ".join(change(m, "->") for m in alt["misconfiguration"])
                   + f"  (h2 {alt['h2']:.4g})")
+    for fix in report.get("other_fixes", []):
+        t.add_row("larger fix", other_fix_text(fix, "->"))
     v = report["validation"]
     if v and v["variants"]:
         orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]

@@ -256,6 +256,14 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
         result["misconfiguration"] = described(small)
         result["alternatives"] = [{"h2": round(space.distance(smalls[i]), 6),
                                    "misconfiguration": described(smalls[i])} for i in near]
+        # the other shrunk fixes, larger than the tolerance: they avoid the accident too, and a
+        # reader weighing the answer should see them (reported, never chosen)
+        result["other_fixes"] = [
+            {"h2": round(space.distance(smalls[i]), 6), "misconfiguration": described(smalls[i]),
+             "min_separation_m": separation[smalls[i]] if np.isfinite(separation[smalls[i]])
+             else None, "stalled": stalled[i]}
+            for i in _other_fixes([space.distance(m) for m in smalls], smalls, [best, *near],
+                                  originals)]
         # fixed.mcap (the accident with the fix) is recorded by phase V, as an extra row of its
         # first batch (rocas.pipeline.validation.record_fix)
     checkpoint.unlink(missing_ok=True)
@@ -321,6 +329,20 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
             seen.add(kind(fixes[i]))
             near.append(i)
     return best, near
+
+
+def _other_fixes(h2: list[float], fixes: list[Mutation], shown: list[int],
+                 originals: Mapping[str, float]) -> list[int]:
+    """Indices of the fixes not ``shown`` (the chosen one and its near alternatives), one per
+    parameter set and direction not shown, smallest h2 first (ties by parameter names)."""
+    seen = {_direction(fixes[i], originals) for i in shown}
+    out = []
+    for i in sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names)):
+        kind = _direction(fixes[i], originals)
+        if kind not in seen:
+            seen.add(kind)
+            out.append(i)
+    return out
 
 
 #: how much wider [m] an equally small fix must keep the ego's smallest gap to be preferred

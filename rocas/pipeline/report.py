@@ -95,6 +95,8 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "confidence": done.get("confidence"),
         "misconfiguration": mis,
         "alternatives": cyber.get("alternatives", []),
+        # the other shrunk fixes that avoid the accident, larger than the tolerance
+        "other_fixes": cyber.get("other_fixes", []),
         "validation": done.get("validation"),
         "search_space": {"parameters_searched": searched, "parameters_total": total,
                          "reduction": (1 - searched / total) if searched else None,
@@ -250,6 +252,16 @@ def change(item: dict[str, Any], arrow: str = "→") -> str:
     return f"{name} {_fmt(item['original'])} {arrow} {_fmt(item['mutated'])}"
 
 
+def other_fix_text(fix: dict[str, Any], arrow: str = "→") -> str:
+    """One of the report's ``other_fixes``: its changes, size and the gap it kept."""
+    notes = [f"h2 {fix['h2']:.4g}"]
+    if fix.get("min_separation_m") is not None:
+        notes.append(f"smallest gap {fix['min_separation_m']:.2f} m")
+    if fix.get("stalled"):
+        notes.append("the ego stays where the accident left it")
+    return ", ".join(change(m, arrow) for m in fix["misconfiguration"]) + f" ({', '.join(notes)})"
+
+
 def robust_text(report: dict[str, Any], arrow: str = "→") -> str:
     """The validation's robust value in words: the fix moved further the same way until it
     avoids clearly more of the perturbed variants (or why there is none)."""
@@ -326,6 +338,9 @@ def markdown(report: dict[str, Any]) -> str:
     for alt in report.get("alternatives", []):
         lines.append("- **Nearly as small a fix**: "
                      + ", ".join(change(m) for m in alt["misconfiguration"]) + f" (h2 {alt['h2']:.4g})")
+    if report.get("other_fixes"):
+        lines.append("- **Larger fixes that also avoid it**: " + "; ".join(
+            other_fix_text(f) for f in report["other_fixes"]))
     v = report["validation"]
     if v and v["variants"]:
         lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "

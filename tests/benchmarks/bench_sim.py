@@ -123,7 +123,7 @@ def breakdown(scenario: str, sizes: list[int], repeat: int) -> None:
     for label in labels:
         secs = np.array([r["parts"].get(label, 0.0) for r in runs])
         (fixed, marginal), *_ = np.linalg.lstsq(design, secs, rcond=None)
-        shares = " ".join(f"{100 * s / r['parts']['total']:>9.1f}%" for s, r in zip(secs, runs))
+        shares = " ".join(f"{100 * s / r['parts']['total']:>9.1f}%" for s, r in zip(secs, runs, strict=True))
         print(f"{label:>13} {1e6 * fixed / ticks:>14.1f} {1e6 * marginal / ticks:>15.2f} {shares}")
         if label == "total":
             print(f"bound with no fixed cost: {ticks / marginal:,.0f} variant-ticks/s "

@@ -241,3 +241,22 @@ def test_another_stack_names_its_own_limits():
     assert camera.low == camera.original < camera.high
     top = space.variable("planner.max_speed_kmh")  # a pace limit
     assert top.low < top.original == top.high
+
+
+def test_the_other_shrunk_fixes_are_listed_once_per_parameter_and_direction():
+    from rocas.pipeline.cyber_phase import _other_fixes
+
+    originals = {"planning.lateral_safety_buffer_m": 0.3, "planning.collision_check_moving_m": 0.5,
+                 "planning.idm_exponent": 4.0}
+    chosen = Mutation({"planning.lateral_safety_buffer_m": 1.69})
+    check = Mutation({"planning.collision_check_moving_m": 2.45})
+    check2 = Mutation({"planning.collision_check_moving_m": 2.6})   # the same fix, larger
+    lower = Mutation({"planning.collision_check_moving_m": 0.1})    # the other direction
+    idm = Mutation({"planning.idm_exponent": 6.4})
+    fixes = [chosen, check2, idm, check, lower]
+    h2 = [1.46, 1.7, 1.34, 1.65, 1.9]
+    got = _other_fixes(h2, fixes, [0], originals)
+    assert [fixes[i] for i in got] == [idm, check, lower]  # smallest first, check2 once as check
+    # a fix shown as a near alternative is not listed again
+    assert [fixes[i] for i in _other_fixes(h2, fixes, [0, 2], originals)] == [check, lower]
+    assert _other_fixes([1.2], [chosen], [0], originals) == []

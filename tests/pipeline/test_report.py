@@ -125,3 +125,27 @@ def test_a_fix_in_the_module_reading_the_walks_module_says_so():
     assert "with ground truth from it the accident does not happen" in report["explanation"]
     assert "in module planning, which reads its output" in report["explanation"]
     assert "walk and module substitution named prediction" in markdown(report)
+
+
+def test_larger_fixes_that_also_avoid_the_accident_are_listed_after_the_chosen_one():
+    """A rotated A11 (variant set s1613): the lateral buffer is the smaller fix, the
+    moving-obstacle check (the catalog's documented parameter) a larger one; both are shown."""
+    state = _state({"reproduced": True, "ego_rmse_m": 0.01})
+    mis = {"module": "planning", "parameter": "planning.lateral_safety_buffer_m",
+           "original": 0.3, "mutated": 1.692}
+    other = {"h2": 1.651042, "min_separation_m": 6.841, "stalled": False,
+             "misconfiguration": [{"module": "planning",
+                                   "parameter": "planning.collision_check_moving_m",
+                                   "original": 0.5, "mutated": 2.453}]}
+    state["done"] |= {
+        "diff": {"deviating_module": "planning", "path": ["/control", "control"]},
+        "cyber": {"scope": "module", "parameters": 42, "misconfiguration": [mis],
+                  "fix": {mis["parameter"]: mis["mutated"]}, "other_fixes": [other]}}
+    report = build_report(state, None, "misconfiguration")
+    assert report["misconfiguration"] == [mis] and report["other_fixes"] == [other]
+    assert ("- **Larger fixes that also avoid it**: planning.collision_check_moving_m 0.5 → "
+            "2.453 (h2 1.651, smallest gap 6.84 m)") in markdown(report)
+    # a run directory from before the list was kept shows none
+    del state["done"]["cyber"]["other_fixes"]
+    report = build_report(state, None, "misconfiguration")
+    assert report["other_fixes"] == [] and "Larger fixes" not in markdown(report)
