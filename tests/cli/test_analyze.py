@@ -1,8 +1,11 @@
 import json
 
+import pytest
+
 from rocas.pipeline.bench import score
 
 
+@pytest.mark.slow  # two analyses as processes, about 20 s
 def test_analyze_json_report_and_resume(rocas, tmp_path):
     out = tmp_path / "run"
     args = ["analyze", "roundabout_red_truck", "--scenario", "--out", out, "--budget", "16",
@@ -207,6 +210,7 @@ def test_a_catalog_file_is_a_scenario_and_the_report_shows_replay_and_settings(r
     assert "settings           seed 0, budget 16, population 8, scope module" in res.stdout
 
 
+@pytest.mark.slow  # about 20 s
 def test_the_interrupt_message_says_what_is_on_disk(rocas, monkeypatch, tmp_path):
     import importlib
 

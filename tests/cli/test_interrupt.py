@@ -152,6 +152,7 @@ def test_sigterm_stops_like_ctrl_c_with_exit_143(rocas, monkeypatch, tmp_path, e
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow  # about 20 s
 def test_sigterm_keeps_the_finished_phases_of_an_analysis(rocas, monkeypatch, tmp_path,
                                                           sigterm_guard):
     out = tmp_path / "run"

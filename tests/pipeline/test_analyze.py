@@ -67,6 +67,7 @@ def test_same_result_whatever_the_executor(red_truck, serial_run, tmp_path):
     assert _stable(parallel) == _stable(serial)
 
 
+@pytest.mark.slow  # about 25 s
 def test_resume_after_an_interruption_gives_the_same_report(red_truck, serial_run, tmp_path):
     _, serial = serial_run
     out = tmp_path / "run"
@@ -117,6 +118,7 @@ def test_a_run_dir_from_before_a_setting_existed_resumes_with_its_default(red_tr
         analyze(red_truck, out, replace(CFG, screening=False), executor=SerialExecutor(), resume=True)
 
 
+@pytest.mark.slow  # about 15 s
 def test_without_screening_the_cyber_search_starts_at_its_first_generation(red_truck, serial_run,
                                                                           tmp_path):
     screened, _ = serial_run
@@ -142,6 +144,7 @@ def test_a_clean_run_is_not_reproduced(red_truck, tmp_path):
     assert "gives no accident" in report["explanation"]
 
 
+@pytest.mark.slow  # three whole analyses, about 110 s
 def test_resume_inside_the_cyber_search_gives_the_same_report(red_truck, tmp_path):
     # a search resumed from its checkpoint, then the shrink and the choice among shrunk fixes
     # (which uses the gaps to other road users the simulations measured) as without the stop;
@@ -256,6 +259,7 @@ def test_the_report_names_the_settings_that_produced_it(serial_run):
     assert "- **Settings**: seed 1, budget 16, population 8," in (out / "report.md").read_text()
 
 
+@pytest.mark.slow  # about 12 s
 def test_a_damaged_run_directory_is_an_input_error(red_truck, serial_run, tmp_path):
     import shutil
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from rocas.pipeline.confidence import agreement, alternate_references, level, note
 
 
@@ -247,6 +249,7 @@ def test_the_walk_goes_on_past_the_window_only_to_the_module_substitution_names(
     assert unread.asked == []
 
 
+@pytest.mark.slow  # a whole analysis on a worker pool, about 45 s
 def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_share_a_batch(
         tmp_path, monkeypatch):
     """Module substitution needs only the accident, so it is started (on a worker, here in

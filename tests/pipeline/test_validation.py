@@ -88,6 +88,7 @@ def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not
     assert rob is not None and rob["fraction"] == 0.5
 
 
+@pytest.mark.slow  # about 75 s
 def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_path, monkeypatch):
     import shutil
 

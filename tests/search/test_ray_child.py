@@ -42,6 +42,7 @@ def _tail(done: subprocess.CompletedProcess[str], lines: int = 30) -> str:
     return "\n".join((done.stdout + "\n" + done.stderr).strip().splitlines()[-lines:])
 
 
+@pytest.mark.slow  # starts a Ray cluster, about 20 s
 def test_the_ray_executor_tests_in_a_child_process(tmp_path):
     pytest.importorskip("ray")
     deaths = []

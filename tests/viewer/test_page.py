@@ -79,6 +79,7 @@ def _errors(driver):
     return [e for e in driver.get_log("browser") if e["level"] == "SEVERE" and not _outside(e)]
 
 
+@pytest.mark.slow  # a browser and a campaign, about 12 s
 def test_the_page_shows_the_groups_and_opens_an_accident_in_rerun(browser, server, small_campaign):
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support import expected_conditions as ec

@@ -28,6 +28,7 @@ def _share(img, rgb, tol=40):
     return (np.abs(img - np.array(rgb)).sum(axis=2) < tol).mean()
 
 
+@pytest.mark.slow  # a Rerun viewer, about 10 s
 def test_analysis_layout_at_1600x900(tmp_path):
     path = tmp_path / "accident.mcap"
     simulate(dataclasses.replace(load_example("roundabout_red_truck"), duration_s=8.0), output=path)
@@ -40,6 +41,7 @@ def test_analysis_layout_at_1600x900(tmp_path):
     assert _share(img, BACKGROUND_RGB, 12) > 0.05  # the scene view is drawn
 
 
+@pytest.mark.slow  # a Rerun viewer, about 10 s
 def test_third_party_diff_shows_the_walk_in_the_cmg_view(tmp_path):
     pair = make_pair(tmp_path, deviating="forecaster")
     result = diff(pair.accident, pair.reference)
