@@ -233,19 +233,22 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
         # with an accident that left the ego standing, a fix that drives it no farther only
         # softened the stop (ranked after the fixes that get it past)
         stalled = [stalls(m) for m in smalls]
-        best, near = _smallest_fix([space.distance(m) for m in smalls], smalls,
-                                   separation=[separation[m] for m in smalls],
+        h2 = [space.distance(m) for m in smalls]
+        best, near = _smallest_fix(h2, smalls, separation=[separation[m] for m in smalls],
                                    originals=originals, stalled=stalled)
         small, chosen = smalls[best], candidates[best]
         result["search_best"] = cand_json(chosen)
         result["minimise_evaluations"] = scores.simulated
+
+        def gap(m: Mutation) -> float | None:
+            # None when nothing was ever near (no actor or object): JSON has no infinity
+            return separation[m] if np.isfinite(separation[m]) else None
+
         result["shrunk_candidates"] = [
             {"search": cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
-             "h2": round(space.distance(m), 6),
-             # None when nothing was ever near (no actor or object): JSON has no infinity
-             "min_separation_m": separation[m] if np.isfinite(separation[m]) else None,
-             "driven_m": round(driven[m], 3), "stalled": st}
-            for c, m, st in zip(candidates, smalls, stalled, strict=True)]
+             "h2": round(d, 6), "min_separation_m": gap(m), "driven_m": round(driven[m], 3),
+             "stalled": st}
+            for c, m, d, st in zip(candidates, smalls, h2, stalled, strict=True)]
         result["fix"] = {k: float(v) for k, v in small.values.items()}
 
         def described(m: Mutation) -> list[dict[str, Any]]:
@@ -254,16 +257,14 @@ def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[st
                     for n in m.names]
 
         result["misconfiguration"] = described(small)
-        result["alternatives"] = [{"h2": round(space.distance(smalls[i]), 6),
-                                   "misconfiguration": described(smalls[i])} for i in near]
+        result["alternatives"] = [{"h2": round(h2[i], 6), "misconfiguration": described(smalls[i])}
+                                  for i in near]
         # the other shrunk fixes, larger than the tolerance: they avoid the accident too, and a
         # reader weighing the answer should see them (reported, never chosen)
         result["other_fixes"] = [
-            {"h2": round(space.distance(smalls[i]), 6), "misconfiguration": described(smalls[i]),
-             "min_separation_m": separation[smalls[i]] if np.isfinite(separation[smalls[i]])
-             else None, "stalled": stalled[i]}
-            for i in _other_fixes([space.distance(m) for m in smalls], smalls, [best, *near],
-                                  originals)]
+            {"h2": round(h2[i], 6), "misconfiguration": described(smalls[i]),
+             "min_separation_m": gap(smalls[i]), "stalled": stalled[i]}
+            for i in _other_fixes(h2, smalls, [best, *near], originals)]
         # fixed.mcap (the accident with the fix) is recorded by phase V, as an extra row of its
         # first batch (rocas.pipeline.validation.record_fix)
     checkpoint.unlink(missing_ok=True)
@@ -322,25 +323,26 @@ def _smallest_fix(h2: list[float], fixes: list[Mutation],
     def kind(m: Mutation) -> Any:
         return m.names if originals is None else _direction(m, originals)
 
-    seen = {kind(fixes[best])}
-    near = []
-    for i in close:
-        if kind(fixes[i]) not in seen:
-            seen.add(kind(fixes[i]))
-            near.append(i)
-    return best, near
+    return best, _new_kinds(close, fixes, [best], kind)
 
 
 def _other_fixes(h2: list[float], fixes: list[Mutation], shown: list[int],
                  originals: Mapping[str, float]) -> list[int]:
     """Indices of the fixes not ``shown`` (the chosen one and its near alternatives), one per
     parameter set and direction not shown, smallest h2 first (ties by parameter names)."""
-    seen = {_direction(fixes[i], originals) for i in shown}
+    order = sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names))
+    return _new_kinds(order, fixes, shown, lambda m: _direction(m, originals))
+
+
+def _new_kinds(order: list[int], fixes: list[Mutation], shown: list[int],
+               kind: Callable[[Mutation], Any]) -> list[int]:
+    """The indices in ``order`` whose fix is of a kind (``kind``) that neither the ``shown``
+    fixes nor an earlier index has: the first fix of each other kind."""
+    seen = {kind(fixes[i]) for i in shown}
     out = []
-    for i in sorted(range(len(fixes)), key=lambda i: (h2[i], fixes[i].names)):
-        kind = _direction(fixes[i], originals)
-        if kind not in seen:
-            seen.add(kind)
+    for i in order:
+        if kind(fixes[i]) not in seen:
+            seen.add(kind(fixes[i]))
             out.append(i)
     return out
 

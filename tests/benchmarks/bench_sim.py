@@ -183,9 +183,10 @@ def main() -> None:
     args = parser.parse_args()
     if args.breakdown:
         sizes = [int(x) for x in args.sizes.split(",")]
+        if len(set(sizes)) < 2:
+            raise SystemExit("bench_sim: --breakdown fits a line: give two or more --sizes")
         print(f"scenario {args.scenario}; load {os.getloadavg()[0]:.2f}; CPU seconds")
-        breakdown(args.scenario, sizes if len(sizes) > 2 else [1, 16, 64, 256, 512],
-                  args.repeat)
+        breakdown(args.scenario, sizes, args.repeat)
         return
     print(f"scenario {args.scenario}; pid {os.getpid()}, cpus {os.cpu_count()}, "
           f"load {os.getloadavg()[0]:.2f}; CPU seconds, {args.repeat} repeats")
