@@ -124,11 +124,37 @@ class ChangePoints:
     indices: tuple[int, ...]
     penalty: float
     noise_std: float
+    rises: tuple[bool, ...] | None = None
+
+    def _first(self) -> int | None:
+        """Position (in :attr:`times_s`) of the first rising change point."""
+        if self.rises is None:
+            return 0 if self.times_s else None
+        return next((i for i, up in enumerate(self.rises) if up), None)
 
     @property
     def first_s(self) -> float | None:
-        """t* of the channel: its first change point, or None if it never deviated."""
-        return self.times_s[0] if self.times_s else None
+        """t* of the channel: its first *rising* change point (the runs move apart), or None
+        if they never did. A fall (the runs moving closer: a convergence) is no departure."""
+        i = self._first()
+        return None if i is None else self.times_s[i]
+
+    @property
+    def first_index(self) -> int | None:
+        """Series index of the bin at :attr:`first_s` (None without it)."""
+        i = self._first()
+        return None if i is None else self.indices[i]
+
+    @property
+    def converges_s(self) -> tuple[float, ...]:
+        """Times of the falling change points before :attr:`first_s` (all of them without
+        it) [s]: the two runs drew closer there."""
+        if self.rises is None:
+            return ()
+        first = self._first()
+        stop = len(self.times_s) if first is None else first
+        return tuple(t for t, up in zip(self.times_s[:stop], self.rises[:stop], strict=True)
+                     if not up)
 
 
 def penalty_for(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> tuple[
@@ -156,7 +182,8 @@ def detect(values: np.ndarray, times_s: np.ndarray, cfg: ChangePointConfig) -> C
     ends = pelt_l2(values, penalty, cfg.min_size)
     idx = _onsets(raw, values, [int(e) for e in ends[:-1]], cfg.smooth_bins // 2)  # last end: len
     idx = _significant(raw, values, idx, cfg.significance)
-    return ChangePoints(tuple(float(times_s[i]) for i in idx), idx, penalty, std)
+    return ChangePoints(tuple(float(times_s[i]) for i in idx), idx, penalty, std,
+                        _rises(raw, values, idx))
 
 
 def pelt_l2(values: np.ndarray, penalty: float, min_size: int = 1) -> list[int]:
@@ -235,6 +262,21 @@ def _onsets(raw: np.ndarray, smooth: np.ndarray, ends: list[int], reach: int) ->
                 and sign * (raw[j - 1] - new) <= tol:
             j -= 1
         out.append(j)
+    return tuple(out)
+
+
+def _rises(raw: np.ndarray, smooth: np.ndarray, idx: tuple[int, ...]) -> tuple[bool, ...]:
+    """Whether each change point raises the level (the runs move apart) or lowers it (they
+    draw closer: a convergence, which Algorithm 1 does not time). The level before is the
+    median of the raw values since the previous change point, the level after the median of
+    the smoothed values up to the next one (as :func:`_significant` judges them).
+    """
+    out: list[bool] = []
+    for i, k in enumerate(idx):
+        start = idx[i - 1] if i else 0
+        stop = idx[i + 1] if i + 1 < len(idx) else len(raw)
+        before = raw[start:k] if k > start else raw[k:k + 1]
+        out.append(median(smooth[k:stop]) >= median(before))
     return tuple(out)
 
 

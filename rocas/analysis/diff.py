@@ -236,9 +236,9 @@ BASELINE_DEPARTURE_SIGMAS = 3.0
 def _means(values: np.ndarray, cps: ChangePoints) -> tuple[float | None, float | None]:
     if len(values) == 0:
         return None, None
-    if not cps.indices:
+    k = cps.first_index
+    if k is None:
         return float(values.mean()), None
-    k = cps.indices[0]
     return float(values[:k].mean()), float(values[k:].mean())
 
 

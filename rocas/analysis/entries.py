@@ -89,4 +89,4 @@ def change_points_from(s: ChannelSeries, cfg: ChangePointConfig, start: int) -> 
         return detect(s.mdr, s.times_s, cfg)
     cps = detect(s.mdr[start:], s.times_s[start:], cfg)
     return ChangePoints(cps.times_s, tuple(start + i for i in cps.indices), cps.penalty,
-                        cps.noise_std)
+                        cps.noise_std, cps.rises)

@@ -394,16 +394,19 @@ def log_diff(rec: Any, result: DiffResult, prefix: str = "diff",
                 f"{prefix}/events",
                 indexes=[rr.TimeColumn(tl, duration=s.times_s[idx]) for tl in timelines],
                 columns=rr.TextLog.columns(
-                    text=[f"{c.topic}: MDR change point at {s.times_s[i]:.2f} s" for i in idx],
+                    text=[f"{c.topic}: MDR {'rises' if up else 'falls (the runs converge)'} "
+                          f"at {s.times_s[i]:.2f} s"
+                          for i, up in zip(idx, c.change_points.rises or (True,) * len(idx),
+                                           strict=True)],
                     level=["INFO"] * len(idx),
                 ),
             )
 
     firsts = sorted(((c.change_point_s, c) for c in result.channels
-                     if c.change_point_s is not None and len(c.change_points.indices)),
+                     if c.change_point_s is not None and c.change_points.first_index is not None),
                     key=lambda tc: (tc[0], tc[1].topic))
     if firsts:
-        idx = [c.change_points.indices[0] for _, c in firsts]
+        idx = [c.change_points.first_index for _, c in firsts]
         times = np.array([t for t, _ in firsts], dtype=np.float64)
         rec.send_columns(
             f"{prefix}/t_star",
