@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from rocas.analysis.align import Alignment, describe
+from rocas.analysis.align import align as align_recordings
 from rocas.analysis.changepoints import ChangePointConfig, ChangePoints, detect
 from rocas.analysis.changepoints import median as changepoint_median
 from rocas.analysis.cmg import (
@@ -23,8 +26,9 @@ from rocas.analysis.cmg import (
 )
 from rocas.analysis.entries import change_points_from, entries_to_pass
 from rocas.analysis.mdr import Tolerance
+from rocas.analysis.noise import FieldRules
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module, past_the_window
-from rocas.analysis.series import ChannelSeries, compute_series
+from rocas.analysis.series import ChannelAccount, ChannelSeries, compute_series
 from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
@@ -96,6 +100,13 @@ class DiffResult:
             passed over (:func:`entries_to_pass`), when there were any; None otherwise.
         control_onset_s: the time of the control channel's first differing bin [s] (None:
             its messages are the same in both recordings).
+        alignment: how the reference was put on the accident's clock.
+        compared_s: (start, end) of the span both recordings cover [s since t = 0].
+        accounts: topic -> messages set aside, repeated or outside the span, and where a
+            channel falls silent (channels with something to report).
+        rules: topic -> how its messages were compared (fields set aside, learned float
+            tolerances), for the channels that have any.
+        noisy_start: the two runs differ at their start (learning was on).
     """
 
     accident: str
@@ -109,6 +120,21 @@ class DiffResult:
     warnings: tuple[str, ...] = field(default=())
     entries: PinpointResult | None = None
     control_onset_s: float | None = None
+    alignment: Alignment | None = None
+    compared_s: tuple[float, float] | None = None
+    accounts: dict[str, ChannelAccount] = field(default_factory=dict)
+    rules: dict[str, FieldRules] = field(default_factory=dict)
+    noisy_start: bool = False
+
+    @property
+    def ignored_fields(self) -> dict[str, tuple[str, ...]]:
+        """topic -> the leaf paths left out of its messages (learned or asked for)."""
+        return {t: tuple(sorted(r.ignored)) for t, r in sorted(self.rules.items()) if r.ignored}
+
+    @property
+    def learned_tolerances(self) -> dict[str, dict[str, float]]:
+        """topic -> leaf path -> the absolute tolerance learned from the shared start."""
+        return {t: dict(sorted(r.atol.items())) for t, r in sorted(self.rules.items()) if r.atol}
 
     @property
     def deviating_module(self) -> str | None:
@@ -198,6 +224,7 @@ class DiffResult:
                     "bins": len(c.series.mdr),
                     "penalty": c.change_points.penalty,
                     "noise_std": c.change_points.noise_std,
+                    "converges_s": list(c.change_points.converges_s),
                 }
                 for c in self.channels
             ],
@@ -224,6 +251,16 @@ class DiffResult:
             },
             "messages_read": {"accident": self.messages_read[0],
                               "reference": self.messages_read[1]},
+            "alignment": None if self.alignment is None else self.alignment.to_json(),
+            "compared_s": None if self.compared_s is None else list(self.compared_s),
+            "noisy_start": self.noisy_start,
+            "ignored_fields": {t: list(p) for t, p in self.ignored_fields.items()},
+            "learned_tolerances": self.learned_tolerances,
+            "messages_set_aside": {
+                t: {"without_partner": list(a.aside), "repeated": list(a.repeated),
+                    "outside_span": list(a.outside),
+                    "falls_silent_s": {"accident": a.stops_s[0], "reference": a.stops_s[1]}}
+                for t, a in sorted(self.accounts.items())},
             "warnings": list(self.warnings),
         }
 
@@ -299,6 +336,9 @@ def diff(
     strict_bins: bool = False,
     allow_unrelated: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    align: str = "auto",
+    ignore_fields: Sequence[str] = (),
+    learn_noise: bool = True,
 ) -> DiffResult:
     """Diff two recordings channel by channel and find the initial deviating module.
 
@@ -318,6 +358,14 @@ def diff(
             (:func:`check_pair`) with a warning instead of refusing it.
         progress: called now and then with (bytes read, bytes in both files) while the
             recordings are read.
+        align: how the reference is put on the accident's clock: "auto" (by identical
+            messages, else by each channel's first message), "first" (each file's first
+            message), "log-time" (no offset) or a topic (its first message in each file);
+            :mod:`rocas.analysis.align`.
+        ignore_fields: leaf paths to leave out of every message (``PATH`` or ``TOPIC:PATH``,
+            shell wildcards), besides those learned.
+        learn_noise: on a pair noisy at its start, learn per field what "the same" means
+            there (:mod:`rocas.analysis.noise`); False: the paper's exact MDR.
 
     Raises:
         InputError: unreadable recordings or CMG file, schema mismatches, a pair that is not
@@ -341,10 +389,17 @@ def diff(
             _refuse_unknown_channel_early(chosen, str(origin), rec_a, rec_b, both_names=(
                 f"{accident} or {reference}"))
 
+    tolerance = Tolerance(atol, rtol)
+    alignment, rules, noisy, align_warnings = align_recordings(
+        rec_a, rec_b, method=align, bin_s=bin_s, baseline_s=cfg.baseline_s,
+        tolerance=None if tolerance.exact else tolerance, learn=learn_noise,
+        ignore=ignore_fields)
     res = compute_series(
-        rec_a, rec_b, bin_s=bin_s, tolerance=Tolerance(atol, rtol),
+        rec_a, rec_b, bin_s=bin_s, tolerance=tolerance,
         reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins, progress=progress,
+        alignment=alignment, rules=rules,
     )
+    res = dataclasses.replace(res, warnings=align_warnings + res.warnings)
     empty = [
         (role, path, rec)
         for role, path, rec, n in (("accident", accident, rec_a, res.messages_read[0]),
@@ -431,6 +486,8 @@ def diff(
     warnings += tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
     )
+    warnings += _span_warnings(res, alignment, str(accident), str(reference))
+    warnings += _account_warnings(res)
     if res.reorder_window_s > REORDER_WINDOW_S:
         warnings += tuple(
             f"{path}: messages are written up to {late:.1f} s out of log-time order; paired "
@@ -451,7 +508,62 @@ def diff(
         warnings=warnings,
         entries=pin_entries,
         control_onset_s=onset,
+        alignment=alignment,
+        compared_s=res.compared_s,
+        accounts=res.accounts,
+        rules=rules,
+        noisy_start=noisy,
     )
+
+
+def _span_warnings(res: Any, alignment: Alignment, accident: str, reference: str
+                   ) -> tuple[str, ...]:
+    """What lies outside the span both recordings cover (one line per file that has some)."""
+    out = []
+    lo, hi = res.compared_s
+    half = res.bin_s / 2
+    for side, (path, other) in enumerate(((accident, reference), (reference, accident))):
+        start, end = alignment.starts_s[side], res.ends_s[side]
+        parts = []
+        if start < lo - half:
+            parts.append(f"its first {lo - start:.2f} s")
+        if end > hi + half:
+            parts.append(f"its last {end - hi:.2f} s")
+        if parts:
+            out.append(f"{path}: {' and '.join(parts)} lie outside the span both recordings "
+                       f"cover (compared {lo:.2f}-{hi:.2f} s, aligned as {describe(alignment)}); "
+                       f"{other} has nothing there to compare with")
+    return tuple(out)
+
+
+def _account_warnings(res: Any) -> tuple[str, ...]:
+    """Messages set aside or left out, and channels that fall silent, one line per kind."""
+    def listing(items: list[tuple[str, tuple[int, int]]]) -> str:
+        shown = [f"{t} ({a} in the accident, {b} in the reference)" for t, (a, b) in items[:4]]
+        more = f" and {len(items) - 4} more channels" if len(items) > 4 else ""
+        return ", ".join(shown) + more
+
+    accounts = sorted(res.accounts.items())
+    out = []
+    aside = [(t, a.aside) for t, a in accounts if any(a.aside)]
+    if aside:
+        n = sum(x + y for _, (x, y) in aside)
+        out.append(f"{n} messages had no partner in the other recording while it published "
+                   f"the channel close by (lost there, or another rate), and were set aside: "
+                   f"{listing(aside)}")
+    rep = [(t, a.repeated) for t, a in accounts if any(a.repeated)]
+    if rep:
+        n = sum(x + y for _, (x, y) in rep)
+        out.append(f"{n} messages were logged twice (the same payload again within "
+                   f"{res.bin_s / 4 * 1000:g} ms) and counted once: {listing(rep)}")
+    for t, a in accounts:
+        for side, role, other in ((0, "accident", "reference"), (1, "reference", "accident")):
+            stop = a.stops_s[side]
+            if stop is not None:
+                out.append(f"channel {t} falls silent at {stop:.2f} s in the {role} while the "
+                           f"{other} goes on publishing it; its messages after that count as "
+                           "differing (a module that stopped, or a log cut short)")
+    return tuple(out)
 
 
 def _refuse_unknown_channel_early(

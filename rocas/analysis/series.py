@@ -31,7 +31,7 @@ take one pass; ``SeriesResult.disorder_s`` says how far each file strays and
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
 import json
 import math
 import operator
@@ -43,7 +43,9 @@ import numpy as np
 from google.protobuf import descriptor_pb2
 from google.protobuf.message import DecodeError
 
+from rocas.analysis.align import Alignment, align
 from rocas.analysis.mdr import EXACT, Tolerance, mdr, repeated_lengths
+from rocas.analysis.noise import FieldRules, masked_mdr
 from rocas.errors import RecordingError
 from rocas.recording.reader import ChannelInfo, Recording
 
@@ -119,8 +121,9 @@ def _entered(before: tuple[_Entry, _Entry], now: tuple[_Entry, _Entry]) -> bool:
     return all(x >= y for x, y in zip(la1, la0, strict=True)) and la1 != la0
 
 
-def _score(a: _Entry, b: _Entry, tol: Tolerance) -> float:
+def _score(a: _Entry, b: _Entry, tol: Tolerance | FieldRules) -> float:
     """MDR of two messages of one channel; equal payloads (one schema) are equal trees.
+    ``tol``: a tolerance for every float leaf, or the channel's learned rules.
 
     Equal payloads are not compared; read undecoded, one of them is decoded (both when their
     decoders differ) only to learn that it decodes, as a decoded pass would have.
@@ -134,6 +137,8 @@ def _score(a: _Entry, b: _Entry, tol: Tolerance) -> float:
         elif b[4] is not None:
             _message(b)
         return 0.0
+    if isinstance(tol, FieldRules):
+        return masked_mdr(_message(a), _message(b), tol)
     return mdr(_message(a), _message(b), tol)
 
 
@@ -149,10 +154,42 @@ class _Pending:
     entered: bool = False
 
 
+def _pair_order(xs: list[_Entry], ys: list[_Entry]) -> tuple[list[_Entry], list[_Entry],
+                                                               list[_Entry]]:
+    """Pair two unequal lists of one bin's messages (both in log-time order): equal payloads
+    first, then each message of the shorter list with the nearest in time of the longer one,
+    in order. Returns (xs paired, ys paired, the longer list's messages left over)."""
+    short_is_x = len(xs) < len(ys)
+    short, long_ = (xs, ys) if short_is_x else (ys, xs)
+    used = [False] * len(long_)
+    match: list[int | None] = [None] * len(short)
+    for i, e in enumerate(short):  # the same message in both: equal payloads
+        for j, f in enumerate(long_):
+            if not used[j] and e[3] and e[3] == f[3]:
+                match[i], used[j] = j, True
+                break
+    for i, e in enumerate(short):  # the rest: the nearest in time still free
+        if match[i] is None:
+            free = [j for j in range(len(long_)) if not used[j]]
+            j = min(free, key=lambda j: (abs(long_[j][0] - e[0]), j))
+            match[i], used[j] = j, True
+    order = sorted(range(len(short)), key=lambda i: match[i])  # type: ignore[arg-type, return-value]
+    s_paired = [short[i] for i in order]
+    l_paired = [long_[match[i]] for i in order]  # type: ignore[index]
+    rest = [f for j, f in enumerate(long_) if not used[j]]
+    return (s_paired, l_paired, rest) if short_is_x else (l_paired, s_paired, rest)
+
+
 @dataclass
 class _Acc:
+    """One channel's bins as the pass scores them. An unpaired message is not scored here:
+    :meth:`finish` decides, once both files are read, whether the other run was silent on
+    the channel around it (it then scores 1) or only missed it (lost, or another rate)."""
+
     bins: list[int] = field(default_factory=list)
-    values: list[float] = field(default_factory=list)
+    sums: list[float] = field(default_factory=list)
+    paired: list[int] = field(default_factory=list)
+    unpaired: list[list[tuple[int, int]]] = field(default_factory=list)  # (aligned t, side)
     counts: list[tuple[int, int]] = field(default_factory=list)
     entered: list[bool] = field(default_factory=list)
     pending: _Pending | None = None
@@ -163,28 +200,35 @@ class _Acc:
         p = self.pending
         if p is None:
             return
-        n = len(p.scores) + len(p.leftover)
-        if n:
+        if p.scores or p.leftover:
             self.bins.append(p.index)
-            self.values.append((sum(p.scores) + len(p.leftover)) / n)
+            self.sums.append(sum(p.scores))
+            self.paired.append(len(p.scores))
+            self.unpaired.append([(e[0], p.leftover_side) for e in p.leftover])
             self.counts.append(p.counts)
             self.entered.append(p.entered)
         self.pending = None
 
     def add_bin(
-        self, index: int, a_msgs: list[_Entry], b_msgs: list[_Entry], tol: Tolerance,
+        self, index: int, a_msgs: list[_Entry], b_msgs: list[_Entry], tol: Any,
         adjacent: bool
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
+        counts = (len(a_msgs), len(b_msgs))
+        if len(a_msgs) != len(b_msgs) and a_msgs and b_msgs:
+            a_msgs, b_msgs, rest = _pair_order(a_msgs, b_msgs)
+            side = ACCIDENT if counts[0] > counts[1] else REFERENCE
+        else:
+            rest = []
+            side = ACCIDENT if len(a_msgs) > len(b_msgs) else REFERENCE
         paired = min(len(a_msgs), len(b_msgs))
         if self.equal_before is not None and paired and a_msgs[0][3] != b_msgs[0][3]:
             # decoded once here: their score and whether content entered both read them
             a_msgs[0], b_msgs[0] = _decoded(a_msgs[0]), _decoded(b_msgs[0])
         scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
-        side = ACCIDENT if len(a_msgs) > paired else REFERENCE
         # decoded now: an unpaired message counts only if it decodes, and may pair next bin
-        leftover = [_decoded(e) for e in (a_msgs if side == ACCIDENT else b_msgs)[paired:]]
-        counts = (len(a_msgs), len(b_msgs))
+        leftover = [_decoded(e) for e in
+                    (rest or (a_msgs if side == ACCIDENT else b_msgs)[paired:])]
         equal = paired > 0 and counts[0] == counts[1] and not any(scores)
         entered = (self.equal_before is not None and paired > 0 and counts[0] == counts[1]
                    and not equal and _entered(self.equal_before, (a_msgs[0], b_msgs[0])))
@@ -203,6 +247,84 @@ class _Acc:
         self.finish_pending()
         self.pending = _Pending(index, scores, side, leftover, counts, entered)
 
+    def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
+               ) -> tuple[list[int], list[float], list[tuple[int, int]],
+                                        list[bool], tuple[int, int], tuple[int, int]]:
+        """The channel's series once both files are read: each unpaired message scores 1
+        where the other run has no message on the channel within :data:`SILENT_PERIODS` of its
+        own period (it was silent there), and is set aside otherwise (lost on the other side,
+        or the channel runs at another rate there), or when it lies past the end of the span
+        both files cover (``end_ns``).
+
+        Args:
+            times: (accident, reference) sorted aligned log times of the channel [ns].
+            end_ns: end of the compared span on the accident's clock [ns].
+
+        Returns:
+            (bins, values, counts, entered, set aside per side, outside the span per side).
+        """
+        gap = []
+        for other in times:
+            period = float(np.median(np.diff(other))) if len(other) > 1 else math.inf
+            gap.append(max(SILENT_PERIODS * period, bin_ns))
+        bins, values, counts, entered = [], [], [], []
+        aside, outside = [0, 0], [0, 0]
+        for b, total, n, loose, c, e in zip(self.bins, self.sums, self.paired, self.unpaired,
+                                            self.counts, self.entered, strict=True):
+            scored = 0
+            for t, side in loose:
+                if t > end_ns + bin_ns / 2:
+                    outside[side] += 1
+                    continue
+                other = times[1 - side]
+                if len(other):
+                    k = int(np.searchsorted(other, t))
+                    near = min(abs(int(other[i]) - t) for i in (k - 1, k) if 0 <= i < len(other))
+                    if near <= gap[1 - side]:
+                        aside[side] += 1
+                        continue
+                scored += 1
+            if n + scored == 0:
+                continue
+            bins.append(b)
+            values.append((total + scored) / (n + scored))
+            counts.append(c)
+            entered.append(e)
+        return bins, values, counts, entered, (aside[0], aside[1]), (outside[0], outside[1])
+
+
+#: An unpaired message scores 1 only where the other run has no message on its channel within
+#: this many of that run's periods (median gap) on the channel, or one bin: the other run was
+#: silent there. Closer, the message was lost on the other side, or the channel runs at
+#: another rate there.
+SILENT_PERIODS = 2.5
+
+
+@dataclass(frozen=True)
+class ChannelAccount:
+    """What became of one channel's messages besides the pairs scored.
+
+    Attributes:
+        aside: (accident, reference) messages without a partner that were set aside, the
+            other run having messages on the channel close by (lost there, or another rate).
+        repeated: (accident, reference) messages logged twice (the same payload again within
+            a quarter bin), left out.
+        outside: (accident, reference) messages outside the span both files cover.
+        stops_s: (accident, reference) the channel's last message, when the other run goes on
+            publishing it for longer than its silence rule allows before the span ends [s];
+            None otherwise.
+    """
+
+    aside: tuple[int, int] = (0, 0)
+    repeated: tuple[int, int] = (0, 0)
+    outside: tuple[int, int] = (0, 0)
+    stops_s: tuple[float | None, float | None] = (None, None)
+
+    @property
+    def clean(self) -> bool:
+        return (not any(self.aside) and not any(self.repeated)
+                and self.stops_s == (None, None))
+
 
 @dataclass(frozen=True)
 class SeriesResult:
@@ -218,8 +340,12 @@ class SeriesResult:
         reorder_window_s: the reorder window the result was computed with [s]: the one
             asked for, or a wider one when a file's disorder needed it.
         span_s: (accident, reference) last minus first log time of the messages read [s].
-        warnings: what the pass found that the result depends on (a summary start time that
-            disagrees with the messages), one line each.
+        warnings: what the pass found that the result depends on, one line each.
+        compared_s: (start, end) of the span both files cover, on the accident's clock [s
+            since t = 0]; the series hold nothing outside it.
+        ends_s: (accident, reference) each file's last message [s since t = 0, aligned].
+        accounts: topic -> what became of its messages besides the scored pairs (only
+            channels with something to report).
     """
 
     series: dict[str, ChannelSeries]
@@ -230,14 +356,9 @@ class SeriesResult:
     reorder_window_s: float = 1.0
     span_s: tuple[float, float] = (0.0, 0.0)
     warnings: tuple[str, ...] = ()
-
-
-class _Realign(Exception):
-    """A message lies before the start time the summary gave for its recording."""
-
-    def __init__(self, side: int) -> None:
-        super().__init__(side)
-        self.side = side
+    compared_s: tuple[float, float] = (0.0, 0.0)
+    ends_s: tuple[float, float] = (0.0, 0.0)
+    accounts: dict[str, ChannelAccount] = field(default_factory=dict)
 
 
 class _TooLate(Exception):
@@ -257,13 +378,17 @@ def compute_series(
     reorder_window_s: float = 1.0,
     adjacent_pairing: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    alignment: Alignment | None = None,
+    rules: dict[str, FieldRules] | None = None,
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
     ``reorder_window_s`` is how far behind in log time a message may arrive (file order)
     and still be paired in one pass; a file that strays further costs another pass with a
     window wide enough for it (module docstring). ``progress``, if given, is called now and
-    then with (bytes read, bytes in both files) of the current pass.
+    then with (bytes read, bytes in both files) of the current pass. ``alignment`` puts the
+    reference on the accident's clock (None: :func:`~rocas.analysis.align.align` with its
+    defaults); ``rules``: topic -> how its messages are compared, instead of ``tolerance``.
 
     Raises:
         RecordingError: a topic's schema differs between the two files, or a recording's log
@@ -273,29 +398,33 @@ def compute_series(
         raise ValueError("bin_s must be a positive number of seconds")
     if not (reorder_window_s > 0 and math.isfinite(reorder_window_s)):
         raise ValueError("reorder_window_s must be a positive number of seconds")
+    warnings: tuple[str, ...] = ()
+    if alignment is None:
+        alignment, learned, _, warnings = align(accident, reference, method="first",
+                                                bin_s=bin_s, tolerance=tolerance, learn=False)
+        rules = learned if rules is None else rules
     window_s = reorder_window_s
-    trust_summary = [True, True]
     lazy = True
     while True:
         try:
-            return _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
-                             trust_summary, lazy, progress)
-        except (_Undecodable, _Realign, _TooLate, RecordingError) as exc:
+            res = _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
+                            alignment, rules or {}, lazy, progress)
+        except (_Undecodable, _TooLate, RecordingError) as exc:
             if lazy:
                 # a pass that decodes only differing payloads holds undecodable messages
                 # as well; where one of them may have mattered (it did not decode, or the
                 # pass stopped early), the pass is read decoded, which leaves them out
                 lazy = False
-            elif isinstance(exc, _Realign):
-                # the summary's start is later than a message: it does not describe these
-                # messages, so the stream aligns itself (the pass then warns)
-                trust_summary[exc.side] = False
             elif isinstance(exc, _TooLate):
                 # each pass at least doubles the window: once it spans the files' log times
                 # nothing can be late, so the loop ends (a span is at most MAX_SPAN_S)
                 window_s = max(2.0 * window_s, exc.window_s)
             else:
                 raise
+        else:
+            if warnings:
+                res = dataclasses.replace(res, warnings=warnings + res.warnings)
+            return res
 
 
 #: A message as a pass streams it: (channel, log time [ns], payload, decoder) read undecoded
@@ -310,26 +439,6 @@ def _stream(rec: Recording, lazy: bool) -> Iterator[_Streamed]:
     return ((m.channel, m.log_time_ns, m.payload, None, m.message) for m in rec.decoded())
 
 
-def _aligned(
-    stream: Iterator[_Streamed], start_ns: int | None, window_ns: float
-) -> tuple[Iterator[_Streamed], int | None]:
-    """The stream and its t = 0: the summary's start, or the earliest log time in the window.
-
-    Without a summary the first message read need not be the earliest; the messages up to
-    ``window_ns`` after it are read ahead (and replayed) to find the earliest among them.
-    """
-    if start_ns is not None:
-        return stream, start_ns
-    ahead: list[_Streamed] = []
-    for msg in stream:
-        ahead.append(msg)
-        if msg[1] > ahead[0][1] + window_ns:
-            break
-    if not ahead:
-        return stream, None
-    return itertools.chain(ahead, stream), min(m[1] for m in ahead)
-
-
 def _one_pass(
     accident: Recording,
     reference: Recording,
@@ -337,16 +446,15 @@ def _one_pass(
     tolerance: Tolerance,
     window_s: float,
     adjacent_pairing: bool,
-    trust_summary: list[bool],
+    alignment: Alignment,
+    rules: dict[str, FieldRules],
     lazy: bool,
     progress: Callable[[int, int], None] | None = None,
 ) -> SeriesResult:
-    """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short,
-    :class:`_Realign` if a summary's start time is later than a message. ``lazy``: read the
-    messages undecoded and decode only those whose payload differs from their partner's
-    (raises :class:`_Undecodable` if one does not decode)."""
+    """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short.
+    ``lazy``: read the messages undecoded and decode only those whose payload differs from
+    their partner's (raises :class:`_Undecodable` if one does not decode)."""
     window_bins = max(1, math.ceil(window_s / bin_s))
-    window_ns = window_bins * bin_s * 1e9
     channels: dict[str, list[ChannelInfo | None]] = {}
     # bin -> topic -> (accident, reference) entries
     open_bins: dict[int, dict[str, tuple[list[_Entry], list[_Entry]]]] = {}
@@ -356,33 +464,35 @@ def _one_pass(
     disorder_ns = [0.0, 0.0]
     bin_ns = bin_s * 1e9
     scored_below = 0  # every bin below this one has been scored
-
-    streams: list[Iterator[_Streamed]] = []
-    starts: list[int | None] = []
-    from_summary: list[bool] = []
-    for side, rec in enumerate((accident, reference)):
-        listed = rec.summary_start_time_ns() if trust_summary[side] else None
-        stream, start = _aligned(_stream(rec, lazy), listed, window_ns)
-        streams.append(stream)
-        starts.append(start)
-        from_summary.append(listed is not None)
+    origin = alignment.origin_ns
+    streams = [_stream(accident, lazy), _stream(reference, lazy)]
     first = [math.inf, math.inf]
     last = [-math.inf, -math.inf]
     max_span_ns = MAX_SPAN_S * 1e9
     recs = (accident, reference)
     total_bytes = accident.size + reference.size
+    # per side: topic -> offset to the accident's clock [ns]; aligned log times; the last
+    # payload and its time (repeats)
+    offsets: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    times: tuple[dict[str, list[int]], dict[str, list[int]]] = ({}, {})
+    last_payload: tuple[dict[str, tuple[bytes, int]], dict[str, tuple[bytes, int]]] = ({}, {})
+    repeated: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    before: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    repeat_ns = bin_ns / 4
 
-    def bin_of(side: int, t: int) -> int:
-        start = starts[side]
-        assert start is not None  # a stream with a message has a start
-        if t < start and from_summary[side]:
-            raise _Realign(side)
+    def offset_of(side: int, topic: str) -> int:
+        o = offsets[side].get(topic)
+        if o is None:
+            o = offsets[side][topic] = 0 if side == ACCIDENT else alignment.offset_ns(topic)
+        return o
+
+    def check_span(side: int, t: int) -> None:
         if t < first[side]:
             first[side] = t
         if t > last[side]:
             last[side] = t
-        if last[side] - first[side] > max_span_ns or abs(t - start) > max_span_ns:
-            lo, hi = min(first[side], start), max(last[side], t)
+        if last[side] - first[side] > max_span_ns or abs(t - origin) > max_span_ns:
+            lo, hi = first[side], last[side]
             raise RecordingError(
                 f"{recs[side].path}: log times span {(hi - lo) / 86400e9:.4g} days "
                 f"({lo} to {hi} ns): a clock that wrapped past 2^64 ns or a corrupted timestamp, "
@@ -390,11 +500,13 @@ def _one_pass(
                 "check the recording's timestamps with 'mcap info'; rocas compares runs of at "
                 f"most {MAX_SPAN_S / 86400:g} days",
             )
-        b = math.floor((t - start) / bin_ns + 0.5)
-        if b < scored_below:
-            # earlier than bins already scored (or than t = 0): a window as wide as this
-            # file's disorder so far (plus rounding) holds it
-            behind = latest[side] - t
+
+    def bin_of(side: int, t_aligned: int) -> int:
+        b = math.floor((t_aligned - origin) / bin_ns + 0.5)
+        if 0 <= b < scored_below:
+            # earlier than bins already scored: a window as wide as this file's disorder so
+            # far (plus rounding) holds it
+            behind = latest[side] - t_aligned
             raise _TooLate(behind / 1e9 + 2 * bin_s if math.isfinite(behind) else 0.0)
         return b
 
@@ -423,11 +535,20 @@ def _one_pass(
                 a = acc.get(topic)
                 if a is None:
                     a = acc[topic] = _Acc()
-                a.add_bin(b, xs, ys, tolerance, adjacent_pairing)
+                a.add_bin(b, xs, ys, rules.get(topic, tolerance), adjacent_pairing)
         scored_below = max(scored_below, below)
 
-    heads: list[_Streamed | None] = [next(streams[0], None), next(streams[1], None)]
-    head_bins = [bin_of(s, h[1]) if h is not None else math.inf for s, h in enumerate(heads)]
+    def head(side: int) -> tuple[_Streamed | None, float]:
+        """The side's next message and its bin (inf at the end)."""
+        msg = next(streams[side], None)
+        if msg is None:
+            return None, math.inf
+        check_span(side, msg[1])
+        return msg, bin_of(side, msg[1] + offset_of(side, msg[0].topic))
+
+    (h0, b0), (h1, b1) = head(0), head(1)
+    heads: list[_Streamed | None] = [h0, h1]
+    head_bins = [b0, b1]
     # per side, the ChannelInfos noted so far by id (held here, so that no id is reused)
     noted: tuple[dict[int, ChannelInfo], dict[int, ChannelInfo]] = ({}, {})
     since_flush = 0
@@ -440,22 +561,34 @@ def _one_pass(
         if id(ch) not in noted[side]:
             note_channel(side, ch)
             noted[side][id(ch)] = ch
-        bin_slots = open_bins.get(b)
-        if bin_slots is None:
-            bin_slots = open_bins[b] = {}
-        slot = bin_slots.get(ch.topic)
-        if slot is None:
-            slot = bin_slots[ch.topic] = ([], [])
-        slot[side].append((t, read[side], ch, payload, decode,
-                           _UNDECODED if decode is not None else msg[4]))
         read[side] += 1
+        topic = ch.topic
+        t_al = t + offset_of(side, topic)
         if t < latest[side]:
             disorder_ns[side] = max(disorder_ns[side], latest[side] - t)
         else:
             latest[side] = t
-        nxt = next(streams[side], None)
-        heads[side] = nxt
-        head_bins[side] = bin_of(side, nxt[1]) if nxt is not None else math.inf
+        prev = last_payload[side].get(topic)
+        if b < 0:
+            # before the span both files cover: nothing in the other run to compare with
+            before[side][topic] = before[side].get(topic, 0) + 1
+        elif prev is not None and prev[0] == payload and abs(t_al - prev[1]) < repeat_ns:
+            repeated[side][topic] = repeated[side].get(topic, 0) + 1
+        else:
+            last_payload[side][topic] = (payload, t_al)
+            tl = times[side].get(topic)
+            if tl is None:
+                tl = times[side][topic] = []
+            tl.append(t_al)
+            bin_slots = open_bins.get(b)
+            if bin_slots is None:
+                bin_slots = open_bins[b] = {}
+            slot = bin_slots.get(topic)
+            if slot is None:
+                slot = bin_slots[topic] = ([], [])
+            slot[side].append((t_al, read[side], ch, payload, decode,
+                               _UNDECODED if decode is not None else msg[4]))
+        heads[side], head_bins[side] = head(side)
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
@@ -468,7 +601,11 @@ def _one_pass(
     for a in acc.values():
         a.finish_pending()
 
+    # the span both files cover, on the accident's clock
+    ref_off = alignment.offset_ns("")
+    end_ns = min(last[ACCIDENT], last[REFERENCE] + ref_off) if read[0] and read[1] else origin
     series: dict[str, ChannelSeries] = {}
+    accounts: dict[str, ChannelAccount] = {}
     for topic in sorted(channels):
         pair = channels[topic]
         only = None
@@ -477,19 +614,26 @@ def _one_pass(
         elif pair[REFERENCE] is None:
             only = "accident"
         a = acc.get(topic, _Acc())
+        ts = (np.asarray(sorted(times[0].get(topic, ())), dtype=np.int64),
+              np.asarray(sorted(times[1].get(topic, ())), dtype=np.int64))
+        bins, values, counts, entered, aside, outside = a.finish(ts, end_ns, bin_ns)
+        outside = (outside[0] + before[0].get(topic, 0), outside[1] + before[1].get(topic, 0))
         series[topic] = ChannelSeries(
             topic=topic,
-            times_s=np.asarray(a.bins, dtype=np.float64) * bin_s,
-            mdr=np.asarray(a.values, dtype=np.float64),
-            messages=np.asarray(a.counts, dtype=np.int64).reshape(-1, 2),
+            times_s=np.asarray(bins, dtype=np.float64) * bin_s,
+            mdr=np.asarray(values, dtype=np.float64),
+            messages=np.asarray(counts, dtype=np.int64).reshape(-1, 2),
             only_in=only,
-            entered=np.asarray(a.entered, dtype=bool),
+            entered=np.asarray(entered, dtype=bool),
         )
-    warnings = tuple(
-        f"{rec.path}: the summary section's start time lies after the first message; "
-        "aligned at the earliest message read instead"
-        for side, rec in enumerate(recs) if not trust_summary[side]
-    )
+        account = ChannelAccount(
+            aside=aside,
+            repeated=(repeated[0].get(topic, 0), repeated[1].get(topic, 0)),
+            outside=outside,
+            stops_s=_stops(ts, end_ns, origin, bin_ns),
+        )
+        if account != ChannelAccount():
+            accounts[topic] = account
     return SeriesResult(
         series=series,
         channels={t: (p[0], p[1]) for t, p in channels.items()},
@@ -499,8 +643,29 @@ def _one_pass(
         reorder_window_s=window_s,
         span_s=tuple(  # type: ignore[arg-type]
             (last[s] - first[s]) / 1e9 if read[s] else 0.0 for s in (ACCIDENT, REFERENCE)),
-        warnings=warnings,
+        compared_s=(0.0, max(0.0, (end_ns - origin) / 1e9)),
+        ends_s=((last[ACCIDENT] - origin) / 1e9 if read[0] else 0.0,
+                (last[REFERENCE] + ref_off - origin) / 1e9 if read[1] else 0.0),
+        accounts=accounts,
     )
+
+
+def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, origin: int, bin_ns: float
+           ) -> tuple[float | None, float | None]:
+    """Per side, the channel's last message when the channel falls silent there for good while
+    the other run goes on publishing it for longer than the silence rule allows before the
+    compared span ends [s since t = 0]; None otherwise."""
+    out: list[float | None] = [None, None]
+    for side in (ACCIDENT, REFERENCE):
+        mine, other = times[side], times[1 - side]
+        if not len(mine) or len(other) < 2:
+            continue
+        period = float(np.median(np.diff(other)))
+        gap = max(SILENT_PERIODS * period, bin_ns)
+        end_other = min(float(other[-1]), end_ns)
+        if end_other - float(mine[-1]) > gap:
+            out[side] = (float(mine[-1]) - origin) / 1e9
+    return out[0], out[1]
 
 
 #: the order of a bin's entries (log time, arrival, ...): the message is never compared

@@ -36,13 +36,54 @@ def test_recordings_align_at_their_first_message(tmp_path):
     assert list(s.mdr) == pytest.approx([0, 0, 1 / N_FIELDS])
 
 
-def test_unpaired_messages_score_one_and_bins_average(tmp_path):
-    a = _write(tmp_path / "a.mcap", [0.0, 0.1, 0.12], [1, 2, 3])
-    b = _write(tmp_path / "b.mcap", [0.0, 0.1], [1, 2])
-    s = _series(tmp_path, a, b).series["/control"]
-    # bin 0.1: (2 vs 2) -> 0, third message unpaired -> 1; mean over 2 messages
-    assert list(s.mdr) == pytest.approx([0.0, 0.5])
-    assert s.messages.tolist() == [[1, 1], [2, 1]]
+def test_an_unpaired_message_scores_one_where_the_other_run_is_silent(tmp_path):
+    # the reference is silent from 0.3 s to 0.9 s while the accident goes on publishing
+    times = [i / 10 for i in range(16)]
+    a = _write(tmp_path / "a.mcap", times, list(range(16)))
+    kept = [i for i in range(16) if not 3 <= i <= 9]
+    b2 = _write(tmp_path / "b2.mcap", [times[i] for i in kept], kept)
+    res = _series(tmp_path, a, b2)
+    s = res.series["/control"]
+    # within 2.5 of the reference's periods (0.25 s) of its messages the accident's messages
+    # are set aside (lost there); farther (0.5-0.7 s) the reference was silent: they score 1
+    assert [round(t, 1) for t, v in zip(s.times_s, s.mdr, strict=True) if v] == [0.5, 0.6, 0.7]
+    assert set(s.mdr) == {0.0, 1.0}
+    assert res.accounts["/control"].aside == (4, 0)
+    # past the reference's last message nothing is compared: the span both files cover
+    b = _write(tmp_path / "b.mcap", [0.0, 0.1], [0, 1])
+    short = _series(tmp_path, a, b)
+    assert list(short.series["/control"].mdr) == [0.0, 0.0]
+    assert short.compared_s == pytest.approx((0.0, 0.1))
+    assert short.accounts["/control"].outside == (14, 0)
+
+
+def test_a_lost_message_is_missing_not_different(tmp_path):
+    times = [i / 10 for i in range(30)]
+    a = _write(tmp_path / "a.mcap", times, list(range(30)))
+    b = _write(tmp_path / "b.mcap", times[:12] + times[13:], list(range(12)) + list(range(13, 30)))
+    res = _series(tmp_path, a, b)
+    assert not res.series["/control"].mdr.any()
+    assert res.accounts["/control"].aside == (1, 0)
+
+
+def test_a_repeated_message_is_counted_once(tmp_path):
+    times = [i / 10 for i in range(20)]
+    a = _write(tmp_path / "a.mcap", times, list(range(20)))
+    b = _write(tmp_path / "b.mcap", times[:5] + [0.4005] + times[5:], list(range(5)) + [4]
+               + list(range(5, 20)))
+    res = _series(tmp_path, a, b)
+    assert not res.series["/control"].mdr.any()
+    assert res.accounts["/control"].repeated == (0, 1)
+
+
+def test_a_channel_at_half_rate_pairs_each_message_with_its_nearest_partner(tmp_path):
+    times = [i / 10 for i in range(30)]
+    a = _write(tmp_path / "a.mcap", times, list(range(30)))
+    b = _write(tmp_path / "b.mcap", times[::2], list(range(30))[::2])
+    res = _series(tmp_path, a, b)
+    assert not res.series["/control"].mdr.any()
+    assert res.accounts["/control"].aside == (14, 0)
+    assert res.accounts["/control"].outside == (1, 0)  # 2.9 s: after the reference's last
 
 
 def test_kth_message_pairs_with_kth(tmp_path):
@@ -57,8 +98,11 @@ def test_a_message_that_slipped_over_a_bin_edge_pairs_with_its_twin(tmp_path):
     b = _write(tmp_path / "b.mcap", [0.0, 0.151, 0.3], [1, 2, 3])
     adjacent = _series(tmp_path, a, b).series["/control"]
     assert list(adjacent.mdr) == [0.0, 0.0, 0.0]  # bins 0.0, 0.1 (with its twin), 0.3
-    strict = _series(tmp_path, a, b, adjacent_pairing=False).series["/control"]
-    assert list(strict.mdr) == [0.0, 1.0, 1.0, 0.0]
+    # without adjacent-bin pairing each is unpaired, and set aside (the other run publishes
+    # the channel close by), not scored as differing
+    strict = _series(tmp_path, a, b, adjacent_pairing=False)
+    assert list(strict.series["/control"].mdr) == [0.0, 0.0]
+    assert strict.accounts["/control"].aside == (1, 1)
 
 
 def test_channel_in_one_recording_only_is_reported(tmp_path):

@@ -1,0 +1,350 @@
+"""Two recordings put on one clock before they are compared, and what their start teaches.
+
+Real loggers do not start together: one starts a second late, one file holds a latched
+message from before the run, one channel is stamped on another clock. rocas reads the first
+:data:`HEAD_S` seconds of each file once (undecoded) and puts the reference's log times on
+the accident's clock (``--align``):
+
+- ``auto`` (default): by **content**. A payload that occurs once in the head of each file, on
+  the same topic, is the same message; the offset on which most such matches agree (within
+  half a bin; at least :data:`MIN_MATCHES` of them and half of all matches) is the files'
+  offset, the median of the agreeing matches. Without such agreement (two noisy runs share no
+  payload), by **first messages**: the median, over the topics both heads hold, of the
+  difference of each topic's first log time (a latched message moves one topic, not the
+  median).
+- ``first``: each file's first message (rocas's rule before alignment existed);
+  ``log-time``: no offset (both files on one clock); ``TOPIC``: that topic's first message in
+  each file.
+
+A topic whose own content matches agree on another offset than the files' (a channel stamped
+on another clock) gets that offset, and the result lists it.
+
+The comparison starts at the later of the two files' first messages, on the accident's
+clock (t = 0): before it one file has nothing to compare with. From the same heads, the
+message pairs of each channel's first ``baseline_s`` seconds teach what "the same" means for
+a noisy pair (:mod:`rocas.analysis.noise`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from rocas.analysis.mdr import Tolerance
+from rocas.analysis.noise import (
+    MIN_START_PAIRS,
+    FieldLearner,
+    FieldRules,
+    leaf_paths,
+    noisy_start,
+    with_ignored,
+)
+from rocas.errors import UsageError
+from rocas.recording.reader import Recording
+
+#: Log time read from the start of each file to align them and learn their noise [s].
+HEAD_S = 8.0
+#: Payloads kept per topic and side from the head, to learn the noise from.
+KEEP_PER_TOPIC = 400
+#: Payload bytes kept per side from the head.
+KEEP_BYTES = 64 << 20
+#: Fewest content matches that agree on an offset for it to be taken.
+MIN_MATCHES = 3
+#: Fewest matches on one topic for it to get its own offset.
+MIN_CHANNEL_MATCHES = 5
+#: Start pairs used per channel to learn its noise.
+MAX_START_PAIRS = 60
+
+ALIGN_METHODS = ("auto", "first", "log-time")
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """How the reference was put on the accident's clock.
+
+    Attributes:
+        method: "content", "first messages", "file starts", "log time" or "first message of
+            TOPIC".
+        offset_s: added to the reference's log times [s].
+        matches: content matches that agree with the offset (0 unless method is content).
+        channel_offsets_s: topic -> the offset used for that topic instead [s] (channels on
+            another clock).
+        origin_ns: t = 0 of the comparison, on the accident's clock [ns]: the later of the
+            two files' first messages.
+        starts_s: (accident, reference) first message of each file [s relative to t = 0].
+    """
+
+    method: str
+    offset_s: float
+    matches: int
+    channel_offsets_s: dict[str, float]
+    origin_ns: int
+    starts_s: tuple[float, float]
+
+    def offset_ns(self, topic: str) -> int:
+        """The offset for a reference message of ``topic`` [ns]."""
+        return round(self.channel_offsets_s.get(topic, self.offset_s) * 1e9)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"method": self.method, "offset_s": self.offset_s, "matches": self.matches,
+                "channel_offsets_s": dict(sorted(self.channel_offsets_s.items())),
+                "starts_s": {"accident": self.starts_s[0], "reference": self.starts_s[1]}}
+
+
+@dataclass
+class _TopicHead:
+    first_ns: int
+    hashes: dict[tuple[int, int], list[int]] = field(default_factory=dict)  # key -> [n, t]
+    kept: list[tuple[int, bytes, Callable[[bytes], Any]]] = field(default_factory=list)
+
+
+@dataclass
+class _Head:
+    topics: dict[str, _TopicHead]
+    earliest_ns: int | None
+
+
+def _read_head(rec: Recording) -> _Head:
+    topics: dict[str, _TopicHead] = {}
+    first_read: int | None = None
+    earliest: int | None = None
+    kept_bytes = 0
+    limit = round(HEAD_S * 1e9)
+    stream = rec.undecoded()
+    try:
+        for ch, t, payload, decode in stream:
+            if first_read is None:
+                first_read = t
+            if t > first_read + limit:
+                break
+            earliest = t if earliest is None else min(earliest, t)
+            th = topics.get(ch.topic)
+            if th is None:
+                th = topics[ch.topic] = _TopicHead(t)
+            elif t < th.first_ns:
+                th.first_ns = t
+            key = (len(payload), hash(payload))
+            slot = th.hashes.get(key)
+            if slot is None:
+                th.hashes[key] = [1, t]
+            else:
+                slot[0] += 1
+            if len(th.kept) < KEEP_PER_TOPIC and kept_bytes + len(payload) <= KEEP_BYTES:
+                th.kept.append((t, payload, decode))
+                kept_bytes += len(payload)
+    finally:
+        close = getattr(stream, "close", None)
+        if close is not None:
+            close()
+    return _Head(topics, earliest)
+
+
+def _agreeing(offsets: list[int], width_ns: float) -> list[int]:
+    """The largest group of ``offsets`` within ``width_ns`` of each other (the earliest such
+    group among equals), sorted."""
+    xs = sorted(offsets)
+    best_lo, best_n, j = 0, 0, 0
+    for i, x in enumerate(xs):
+        while x - xs[j] > width_ns:
+            j += 1
+        if i - j + 1 > best_n:
+            best_lo, best_n = j, i - j + 1
+    return xs[best_lo:best_lo + best_n]
+
+
+def _median_int(xs: list[int]) -> int:
+    s = sorted(xs)
+    k = len(s) // 2
+    return s[k] if len(s) % 2 else (s[k - 1] + s[k]) // 2
+
+
+def _content_offsets(a: _Head, b: _Head) -> dict[str, list[int]]:
+    """topic -> accident minus reference log time of each payload found once in each head."""
+    out: dict[str, list[int]] = {}
+    for topic, ta in a.topics.items():
+        tb = b.topics.get(topic)
+        if tb is None:
+            continue
+        votes = [sa[1] - sb[1] for key, sa in ta.hashes.items()
+                 if sa[0] == 1 and (sb := tb.hashes.get(key)) is not None and sb[0] == 1]
+        if votes:
+            out[topic] = votes
+    return out
+
+
+def align(accident: Recording, reference: Recording, *, method: str = "auto",
+          bin_s: float = 0.1, baseline_s: float = 3.0, tolerance: Tolerance | None = None,
+          learn: bool = True, ignore: Iterable[str] = ()
+          ) -> tuple[Alignment, dict[str, FieldRules], bool, tuple[str, ...]]:
+    """Align the two recordings and learn each channel's comparison rules from their start.
+
+    Args:
+        method: "auto", "first", "log-time", or a topic (its first message in each file).
+        bin_s: the series' bin width [s]; content matches agree within half of it.
+        baseline_s: length of each channel's start the noise is learned from [s].
+        tolerance: ``--atol``/``--rtol`` (None: none given; floats then get learned
+            tolerances on a noisy pair).
+        learn: learn tolerances and fields to set aside on a noisy pair (False: the paper's
+            exact MDR, ``ignore`` patterns still apply).
+        ignore: ``--ignore-field`` patterns (``PATH`` or ``TOPIC:PATH``, shell wildcards).
+
+    Returns:
+        (the alignment, topic -> rules for the topics that have any, whether the pair is
+        noisy at its start, warning lines).
+
+    Raises:
+        UsageError: ``method`` names a topic that is not in both files' heads.
+    """
+    head_a, head_b = _read_head(accident), _read_head(reference)
+    warnings: list[str] = []
+    starts: list[int | None] = []
+    for rec, head in ((accident, head_a), (reference, head_b)):
+        listed = rec.summary_start_time_ns()
+        start = head.earliest_ns
+        if listed is not None and start is not None and listed > start:
+            warnings.append(f"{rec.path}: the summary section's start time lies after the first "
+                            "message; aligned at the earliest message read instead")
+        elif listed is not None:
+            start = listed if start is None else min(start, listed)
+        starts.append(start)
+    if starts[0] is None or starts[1] is None:
+        alignment = Alignment("file starts", 0.0, 0, {}, starts[0] or starts[1] or 0, (0.0, 0.0))
+        return alignment, {}, False, tuple(warnings)
+    sa, sb = starts[0], starts[1]
+    width = bin_s * 1e9 / 2.0
+    by_topic = _content_offsets(head_a, head_b)
+    matches = 0
+    channel: dict[str, float] = {}
+    if method == "auto":
+        votes = [v for vs in by_topic.values() for v in vs]
+        agree = _agreeing(votes, width) if votes else []
+        if len(agree) >= MIN_MATCHES and 2 * len(agree) >= len(votes):
+            how, offset, matches = "content", _median_int(agree), len(agree)
+            for topic, vs in sorted(by_topic.items()):
+                own = _agreeing(vs, width)
+                if len(own) >= MIN_CHANNEL_MATCHES and 5 * len(own) >= 4 * len(vs):
+                    o = _median_int(own)
+                    if abs(o - offset) > width:
+                        channel[topic] = o / 1e9
+        else:
+            shared = sorted(set(head_a.topics) & set(head_b.topics))
+            if shared:
+                how = "first messages"
+                offset = _median_int([head_a.topics[t].first_ns - head_b.topics[t].first_ns
+                                      for t in shared])
+            else:
+                how, offset = "file starts", sa - sb
+    elif method == "first":
+        how, offset = "file starts", sa - sb
+    elif method == "log-time":
+        how, offset = "log time", 0
+    else:
+        ta, tb = head_a.topics.get(method), head_b.topics.get(method)
+        if ta is None or tb is None:
+            raise UsageError(
+                f"--align {method}: that channel has no message in the first {HEAD_S:g} s of "
+                f"{'either recording' if ta is None and tb is None else 'one recording'}",
+                "name a channel both recordings publish from their start, or use --align auto")
+        how, offset = f"first message of {method}", ta.first_ns - tb.first_ns
+    origin = max(sa, sb + offset)
+    alignment = Alignment(how, offset / 1e9, matches, channel, origin,
+                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9))
+    rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
+                          list(ignore))
+    return alignment, rules, noisy, tuple(warnings)
+
+
+def _start_pairs(ta: _TopicHead, tb: _TopicHead, off: int, lo: float, hi: float, width: float
+                 ) -> list[tuple[tuple[int, bytes, Any], tuple[int, bytes, Any]]]:
+    """Each accident message of [lo, hi] paired with the nearest unpaired reference message
+    within ``width`` (aligned times, in order)."""
+    xs = sorted((m for m in ta.kept if lo <= m[0] <= hi), key=lambda m: m[0])
+    ys = sorted((m for m in tb.kept if lo <= m[0] + off <= hi), key=lambda m: m[0])
+    pairs = []
+    j = 0
+    for x in xs:
+        while j < len(ys) and ys[j][0] + off < x[0] - width:
+            j += 1
+        if j < len(ys) and abs(ys[j][0] + off - x[0]) <= width:
+            pairs.append((x, ys[j]))
+            j += 1
+            if len(pairs) >= MAX_START_PAIRS:
+                break
+    return pairs
+
+
+def _learn(head_a: _Head, head_b: _Head, alignment: Alignment, bin_s: float, baseline_s: float,
+           tolerance: Tolerance | None, learn: bool, ignore: list[str]
+           ) -> tuple[dict[str, FieldRules], bool]:
+    learners: dict[str, FieldLearner] = {}
+    samples: dict[str, Any] = {}
+    lo = alignment.origin_ns - bin_s * 1e9 / 2
+    hi = alignment.origin_ns + baseline_s * 1e9
+    pairs_of = {}
+    for topic, ta in head_a.topics.items():
+        tb = head_b.topics.get(topic)
+        if tb is None:
+            continue
+        pairs = _start_pairs(ta, tb, alignment.offset_ns(topic), lo, hi, bin_s * 1e9 / 2)
+        pairs_of[topic] = pairs
+        learner = learners[topic] = FieldLearner()
+        for i, (x, y) in enumerate(pairs):
+            same = x[1] == y[1]
+            learner.pairs += 1
+            learner.identical += same
+            learner.first_identical += same and i < MIN_START_PAIRS
+    noisy = noisy_start(learners.values())
+    default = tolerance if tolerance is not None else Tolerance()
+    rules: dict[str, FieldRules] = {}
+    for topic, learner in learners.items():
+        r = FieldRules(default=default)
+        if learn and noisy and learner.identical < learner.pairs:
+            fresh = FieldLearner()
+            for x, y in pairs_of[topic]:
+                try:
+                    ma, mb = x[2](x[1]), y[2](y[1])
+                except Exception:  # a foreign file can hold anything; the pass counts it
+                    continue
+                samples.setdefault(topic, ma)
+                fresh.add(ma, mb, x[1] == y[1])
+            r = fresh.rules(default, learn_floats=tolerance is None)
+        if ignore:
+            sample = samples.get(topic)
+            if sample is None:
+                sample = _first_decoded(head_a.topics[topic]) or _first_decoded(
+                    head_b.topics[topic])
+            if sample is not None:
+                r = with_ignored(r, topic, ignore, leaf_paths(sample))
+        if not r.trivial:
+            rules[topic] = r
+    if ignore:  # topics in one head only
+        for head in (head_a, head_b):
+            for topic, th in head.topics.items():
+                if topic not in learners and (m := _first_decoded(th)) is not None:
+                    r = with_ignored(FieldRules(default=default), topic, ignore, leaf_paths(m))
+                    if not r.trivial:
+                        rules.setdefault(topic, r)
+    return rules, noisy
+
+
+def _first_decoded(th: _TopicHead) -> Any | None:
+    for _, payload, decode in th.kept[:3]:
+        try:
+            return decode(payload)
+        except Exception:  # noqa: BLE001 - a foreign file can hold anything
+            continue
+    return None
+
+
+def describe(alignment: Alignment) -> str:
+    """One line on the alignment, for the terminal."""
+    what = f"reference {alignment.offset_s:+.3f} s ({alignment.method}"
+    if alignment.matches:
+        what += f": {alignment.matches} identical messages agree"
+    what += ")"
+    if alignment.channel_offsets_s:
+        what += "; on another clock: " + ", ".join(
+            f"{t} {o:+.3f} s" for t, o in sorted(alignment.channel_offsets_s.items()))
+    return what
+
