@@ -45,6 +45,9 @@ MIN_START_PAIRS = 3
 IGNORE_FRACTION = 0.9
 #: A learned tolerance is this many times the largest difference seen at the start.
 TOLERANCE_MARGIN = 2.0
+#: A float is noise when its largest difference between the runs at the start is at most this
+#: many times its largest step from one message to the next within a run.
+NOISE_STEP_RATIO = 4.0
 #: A pair is noisy at its start when, over its channels with start pairs, the median fraction
 #: of byte-identical start pairs is below this.
 NOISY_IDENTICAL_FRACTION = 0.5
@@ -60,11 +63,17 @@ class FieldRules:
         ignored: leaf paths left out of the message tree.
         atol: leaf path -> absolute tolerance of that float field [the field's unit].
         default: the tolerance of every other float leaf (``--atol``/``--rtol``).
+        other_floats: absolute tolerance of a float leaf the start did not show (an obstacle
+            that comes into view later): the channel's largest learned tolerance, its noise
+            level [the fields' unit]; 0 when none was learned.
+        seen: the leaf paths the start showed (they keep their own rule, exact when none).
     """
 
     ignored: frozenset[str] = frozenset()
     atol: Mapping[str, float] = field(default_factory=dict)
     default: Tolerance = EXACT
+    other_floats: float = 0.0
+    seen: frozenset[str] = frozenset()
 
     @property
     def trivial(self) -> bool:
@@ -158,17 +167,30 @@ class FieldLearner:
         self.pairs = 0
         self.identical = 0
         self.first_identical = 0  # among the first MIN_START_PAIRS pairs
-        self.seen: dict[str, int] = {}
         self.differ: dict[str, int] = {}
         self.is_float: dict[str, bool] = {}
         self.max_abs: dict[str, float] = {}
+        # within each run, from one start message to the next: steps, steps that changed the
+        # leaf, steps that lowered it, the largest float step
+        self.steps: dict[str, list[int]] = {}
+        self.max_step: dict[str, float] = {}
+        self._last: tuple[dict[str, list[Any]], dict[str, list[Any]]] | None = None
+        self.seen_paths: set[str] = set()
 
     def add(self, a: Any, b: Any, identical: bool) -> None:
-        """One start pair (decoded messages; ``identical``: their payloads are the same)."""
+        """One start pair (decoded messages, consecutive pairs in time order; ``identical``:
+        their payloads are the same)."""
         self.pairs += 1
         if identical:
             self.identical += 1
             self.first_identical += self.pairs <= MIN_START_PAIRS
+        now = (_values(a), _values(b))
+        self.seen_paths.update(now[0], now[1])
+        if self._last is not None:
+            for prev, cur in zip(self._last, now, strict=True):
+                self._step(prev, cur)
+        self._last = now
+        if identical:
             return
         seen_here: dict[str, bool] = {}
         for path, is_float, va, vb in _leaf_pairs(a, b, "", False):
@@ -178,31 +200,90 @@ class FieldLearner:
             if biggest > self.max_abs.get(path, 0.0):
                 self.max_abs[path] = biggest
         for path, differs in seen_here.items():
-            self.seen[path] = self.seen.get(path, 0) + 1
             if differs:
                 self.differ[path] = self.differ.get(path, 0) + 1
+
+    def _step(self, prev: dict[str, list[Any]], cur: dict[str, list[Any]]) -> None:
+        for path, values in cur.items():
+            before = prev.get(path)
+            if before is None or len(before) != len(values):
+                continue
+            st = self.steps.setdefault(path, [0, 0, 0])
+            st[0] += 1
+            changed = lowered = False
+            for x, y in zip(before, values, strict=True):
+                if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+                    xa, ya = np.asarray(x), np.asarray(y)
+                    if xa.shape != ya.shape:
+                        changed = True
+                        continue
+                    if not np.array_equal(xa, ya):
+                        changed = True
+                        if xa.dtype.kind in "iuf" and ya.dtype.kind in "iuf":
+                            d = ya.astype(np.float64) - xa.astype(np.float64)
+                            lowered = lowered or bool(np.any(d < 0))
+                            fin = np.abs(d[np.isfinite(d)])
+                            if len(fin):
+                                self.max_step[path] = max(self.max_step.get(path, 0.0),
+                                                          float(fin.max()))
+                elif x != y:
+                    changed = True
+                    if isinstance(x, (int, float)) and isinstance(y, (int, float)) \
+                            and not isinstance(x, bool):
+                        lowered = lowered or y < x
+                        d = abs(float(y) - float(x))
+                        if math.isfinite(d):
+                            self.max_step[path] = max(self.max_step.get(path, 0.0), d)
+            st[1] += changed
+            st[2] += lowered
 
     @property
     def identical_fraction(self) -> float:
         return self.identical / self.pairs if self.pairs else 1.0
 
     def rules(self, default: Tolerance, learn_floats: bool) -> FieldRules:
-        """The rules learned (``learn_floats`` False: floats keep ``default``)."""
+        """The rules learned (``learn_floats`` False: floats keep ``default``).
+
+        - A leaf that differs between the runs in at least :data:`IGNORE_FRACTION` of the
+          start pairs and changes from one message to the next within the runs in at least
+          half of the steps is a stamp, a counter or a changing id: set aside. So is a float
+          that differs that often, never falls within the runs, and differs between them by
+          more than :data:`NOISE_STEP_RATIO` of its steps (a clock: two runs' stamps).
+        - Another float that differs at the start is noise when its largest difference
+          between the runs is at most :data:`NOISE_STEP_RATIO` times its largest step from
+          one message to the next within a run (sensor noise is as large between runs as
+          between messages; two different drives differ by far more): it gets a tolerance of
+          :data:`TOLERANCE_MARGIN` times that difference. Otherwise the difference is real
+          (present from the start) and the leaf stays exact.
+        """
         if self.pairs < MIN_START_PAIRS:
             return FieldRules(default=default)
         ignored, atol = set(), {}
         for path, n_diff in self.differ.items():
-            # identical pairs hold every leaf the same: they count as seen, not differing
             share = n_diff / self.pairs
-            if self.is_float.get(path):
-                biggest = self.max_abs.get(path, 0.0)
-                if learn_floats and math.isfinite(biggest) and biggest > 0:
-                    atol[path] = TOLERANCE_MARGIN * biggest
-                elif learn_floats and share >= IGNORE_FRACTION:
-                    ignored.add(path)  # differs without a finite size (NaN against a number)
-            elif share >= IGNORE_FRACTION:
+            steps, changed, lowered = self.steps.get(path, (0, 0, 0))
+            moving = steps > 0 and 2 * changed >= steps
+            biggest = self.max_abs.get(path, 0.0)
+            step = self.max_step.get(path, 0.0)
+            if share >= IGNORE_FRACTION and moving and (
+                    not self.is_float.get(path)
+                    or (lowered == 0 and biggest > NOISE_STEP_RATIO * step)):
                 ignored.add(path)
-        return FieldRules(frozenset(ignored), atol, default)
+                continue
+            if not (self.is_float.get(path) and learn_floats):
+                continue
+            if math.isfinite(biggest) and 0 < biggest <= NOISE_STEP_RATIO * step:
+                atol[path] = TOLERANCE_MARGIN * biggest
+        return FieldRules(frozenset(ignored), atol, default,
+                          max(atol.values()) if atol else 0.0, frozenset(self.seen_paths))
+
+
+def _values(message: Any) -> dict[str, list[Any]]:
+    """Every leaf value of one message by path (repeated elements in order)."""
+    out: dict[str, list[Any]] = {}
+    for path, _, va, _ in _leaf_pairs(message, message, "", False):
+        out.setdefault(path, []).append(va)
+    return out
 
 
 def _leaf_difference(va: Any, vb: Any, is_float: bool) -> tuple[bool, float]:
@@ -320,7 +401,9 @@ def _masked(a: Any, b: Any, path: str, is_float: bool, rules: FieldRules) -> flo
 def _tolerance(path: str, rules: FieldRules) -> Tolerance:
     atol = rules.atol.get(path)
     if atol is None:
-        return rules.default
+        if path in rules.seen or not rules.other_floats:
+            return rules.default
+        atol = rules.other_floats
     return Tolerance(max(atol, rules.default.atol), rules.default.rtol)
 
 

@@ -248,13 +248,13 @@ class _Acc:
         self.pending = _Pending(index, scores, side, leftover, counts, entered)
 
     def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
-               ) -> tuple[list[int], list[float], list[tuple[int, int]],
-                                        list[bool], tuple[int, int], tuple[int, int]]:
+               ) -> tuple[list[int], list[float], list[tuple[int, int]], list[bool],
+                          tuple[int, int], tuple[int, int]]:
         """The channel's series once both files are read: each unpaired message scores 1
-        where the other run has no message on the channel within :data:`SILENT_PERIODS` of its
-        own period (it was silent there), and is set aside otherwise (lost on the other side,
-        or the channel runs at another rate there), or when it lies past the end of the span
-        both files cover (``end_ns``).
+        where the other run was silent on the channel around it (:func:`_silent`), and is set
+        aside otherwise (lost on the other side, stamped at another time, or the channel runs
+        at another rate there), or when it lies past the end of the span both files cover
+        (``end_ns``).
 
         Args:
             times: (accident, reference) sorted aligned log times of the channel [ns].
@@ -263,10 +263,6 @@ class _Acc:
         Returns:
             (bins, values, counts, entered, set aside per side, outside the span per side).
         """
-        gap = []
-        for other in times:
-            period = float(np.median(np.diff(other))) if len(other) > 1 else math.inf
-            gap.append(max(SILENT_PERIODS * period, bin_ns))
         bins, values, counts, entered = [], [], [], []
         aside, outside = [0, 0], [0, 0]
         for b, total, n, loose, c, e in zip(self.bins, self.sums, self.paired, self.unpaired,
@@ -275,15 +271,10 @@ class _Acc:
             for t, side in loose:
                 if t > end_ns + bin_ns / 2:
                     outside[side] += 1
-                    continue
-                other = times[1 - side]
-                if len(other):
-                    k = int(np.searchsorted(other, t))
-                    near = min(abs(int(other[i]) - t) for i in (k - 1, k) if 0 <= i < len(other))
-                    if near <= gap[1 - side]:
-                        aside[side] += 1
-                        continue
-                scored += 1
+                elif _silent(times[1 - side], times[side], t):
+                    scored += 1
+                else:
+                    aside[side] += 1
             if n + scored == 0:
                 continue
             bins.append(b)
@@ -293,11 +284,27 @@ class _Acc:
         return bins, values, counts, entered, (aside[0], aside[1]), (outside[0], outside[1])
 
 
-#: An unpaired message scores 1 only where the other run has no message on its channel within
-#: this many of that run's periods (median gap) on the channel, or one bin: the other run was
-#: silent there. Closer, the message was lost on the other side, or the channel runs at
-#: another rate there.
-SILENT_PERIODS = 2.5
+#: Half-width of the window around an unpaired message in which the two runs' messages on its
+#: channel are counted [s].
+SILENT_WINDOW_S = 0.5
+#: The other run was silent around an unpaired message when it wrote fewer than this fraction
+#: of the messages this run wrote on the channel within :data:`SILENT_WINDOW_S` of it.
+SILENT_RATE = 0.25
+
+
+def _count(times: np.ndarray, lo: float, hi: float) -> int:
+    return int(np.searchsorted(times, hi, side="right") - np.searchsorted(times, lo, side="left"))
+
+
+def _silent(other: np.ndarray, mine: np.ndarray, t: int) -> bool:
+    """Whether the other run was silent on a channel around an unpaired message of this one at
+    ``t`` [ns]: within :data:`SILENT_WINDOW_S` of it, it wrote fewer than :data:`SILENT_RATE`
+    times the messages this run wrote there. A lost message, a channel at half rate, one
+    stamped when its buffer was flushed, or jitter leave the other run's count close to this
+    one's; a module that stopped publishing, or a channel that only one run writes then,
+    leave it near zero. ``other``, ``mine``: sorted aligned log times [ns]."""
+    w = SILENT_WINDOW_S * 1e9
+    return _count(other, t - w, t + w) < SILENT_RATE * _count(mine, t - w, t + w)
 
 
 @dataclass(frozen=True)
@@ -653,17 +660,15 @@ def _one_pass(
 def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, origin: int, bin_ns: float
            ) -> tuple[float | None, float | None]:
     """Per side, the channel's last message when the channel falls silent there for good while
-    the other run goes on publishing it for longer than the silence rule allows before the
-    compared span ends [s since t = 0]; None otherwise."""
+    the other run goes on publishing it for more than :data:`SILENT_WINDOW_S` of the compared
+    span [s since t = 0]; None otherwise."""
     out: list[float | None] = [None, None]
     for side in (ACCIDENT, REFERENCE):
         mine, other = times[side], times[1 - side]
-        if not len(mine) or len(other) < 2:
+        if not len(mine) or not len(other):
             continue
-        period = float(np.median(np.diff(other)))
-        gap = max(SILENT_PERIODS * period, bin_ns)
         end_other = min(float(other[-1]), end_ns)
-        if end_other - float(mine[-1]) > gap:
+        if end_other - float(mine[-1]) > max(SILENT_WINDOW_S * 1e9, bin_ns):
             out[side] = (float(mine[-1]) - origin) / 1e9
     return out[0], out[1]
 

@@ -59,6 +59,17 @@ def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
                    help="pair messages only within their own bin (no adjacent-bin pairing)")
     g.add_argument("--smooth", type=int, default=5, metavar="BINS",
                    help="running-median width applied before PELT (default 5; 1 = off)")
+    g.add_argument("--align", default="auto", metavar="HOW",
+                   help="put the reference on the accident's clock: auto (by identical "
+                   "messages, else by each channel's first message; default), first (each "
+                   "file's first message), log-time (no offset), or a TOPIC (its first message "
+                   "in each file)")
+    g.add_argument("--ignore-field", action="append", default=[], metavar="PATTERN",
+                   help="leave a field out of every message: PATH or TOPIC:PATH with shell "
+                   "wildcards, e.g. 'header.stamp.*' (repeatable)")
+    g.add_argument("--exact", action="store_true",
+                   help="compare leaves exactly even when the runs differ from their first "
+                   "messages (no learned tolerances or fields set aside)")
     g.add_argument("--allow-unrelated", action="store_true",
                    help="diff a pair that does not look like two runs of the same thing "
                    "(with a warning) instead of refusing it")
@@ -111,10 +122,15 @@ def render(result: DiffResult, env: Env) -> None:
         topic = Text(c.topic, style="bold" if c.topic in on_path else "")
         if c.only_in:
             topic.append(f" (only in {c.only_in})", style="yellow")
+        converges = c.change_points.converges_s
+        if converges:
+            topic.append(f" (converges at {converges[0]:.2f} s)", style="cyan")
         table.add_row(topic, ", ".join(c.writers) or "—", _num(c.change_point_s, ".2f"),
                       _num(c.mdr_before), _num(c.mdr_after), change)
     out.print(table)
     out.print()
+    for line in comparison_lines(result):
+        prose(out, line)
     if p.fallback:
         prose(out, f"Note: {p.fallback}.")
     if p.deviating_module:
@@ -138,6 +154,35 @@ def render(result: DiffResult, env: Env) -> None:
             prose(out, f"  {m}: {why}")
 
 
+def comparison_lines(result: DiffResult) -> list[str]:
+    """How the two recordings were compared: the alignment, the span, and what the start
+    taught (fields set aside, learned tolerances), one line each."""
+    from rocas.analysis.align import describe
+
+    lines = []
+    if result.alignment is not None:
+        lines.append(f"Aligned: {describe(result.alignment)}.")
+    if result.compared_s is not None:
+        lo, hi = result.compared_s
+        lines.append(f"Compared: {lo:.2f}-{hi:.2f} s (the span both recordings cover).")
+    ignored = result.ignored_fields
+    if ignored:
+        n = sum(len(p) for p in ignored.values())
+        shown = "; ".join(f"{t}: {', '.join(p[:4])}{' ...' if len(p) > 4 else ''}"
+                          for t, p in list(ignored.items())[:4])
+        lines.append(f"Set aside ({n} fields that differ in nearly every message of the shared "
+                     f"start: stamps, counters, ids): {shown}"
+                     + (f"; and {len(ignored) - 4} more channels" if len(ignored) > 4 else "")
+                     + ".")
+    tol = result.learned_tolerances
+    if tol:
+        n = sum(len(p) for p in tol.values())
+        lines.append(f"Noise learned from the shared start: {n} float fields on {len(tol)} "
+                     "channels compared within twice their largest difference there "
+                     "(--json lists them; --exact turns this off).")
+    return lines
+
+
 def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.analysis.diff import diff
 
@@ -157,6 +202,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
             strict_bins=args.strict_bins,
             allow_unrelated=args.allow_unrelated,
             progress=progress.update if progress.enabled else None,
+            align=args.align,
+            ignore_fields=args.ignore_field,
+            learn_noise=not args.exact,
         )
     for w in result.warnings:
         env.warn(w)

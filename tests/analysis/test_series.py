@@ -37,24 +37,25 @@ def test_recordings_align_at_their_first_message(tmp_path):
 
 
 def test_an_unpaired_message_scores_one_where_the_other_run_is_silent(tmp_path):
-    # the reference is silent from 0.3 s to 0.9 s while the accident goes on publishing
-    times = [i / 10 for i in range(16)]
-    a = _write(tmp_path / "a.mcap", times, list(range(16)))
-    kept = [i for i in range(16) if not 3 <= i <= 9]
+    # the reference is silent from 1.0 s to 1.9 s while the accident goes on publishing
+    times = [i / 10 for i in range(30)]
+    a = _write(tmp_path / "a.mcap", times, list(range(30)))
+    kept = [i for i in range(30) if not 10 <= i <= 19]
     b2 = _write(tmp_path / "b2.mcap", [times[i] for i in kept], kept)
     res = _series(tmp_path, a, b2)
     s = res.series["/control"]
-    # within 2.5 of the reference's periods (0.25 s) of its messages the accident's messages
-    # are set aside (lost there); farther (0.5-0.7 s) the reference was silent: they score 1
-    assert [round(t, 1) for t, v in zip(s.times_s, s.mdr, strict=True) if v] == [0.5, 0.6, 0.7]
+    # near the edges of the silence the reference still wrote most of what the accident did
+    # within half a second: set aside; in its middle it wrote (almost) nothing: they score 1
+    scored = [round(t, 1) for t, v in zip(s.times_s, s.mdr, strict=True) if v]
+    assert len(scored) >= 3 and all(1.0 < t < 1.9 for t in scored)
     assert set(s.mdr) == {0.0, 1.0}
-    assert res.accounts["/control"].aside == (4, 0)
+    assert res.accounts["/control"].aside == (10 - len(scored), 0)
     # past the reference's last message nothing is compared: the span both files cover
     b = _write(tmp_path / "b.mcap", [0.0, 0.1], [0, 1])
     short = _series(tmp_path, a, b)
     assert list(short.series["/control"].mdr) == [0.0, 0.0]
     assert short.compared_s == pytest.approx((0.0, 0.1))
-    assert short.accounts["/control"].outside == (14, 0)
+    assert short.accounts["/control"].outside == (28, 0)
 
 
 def test_a_lost_message_is_missing_not_different(tmp_path):
