@@ -302,6 +302,8 @@ def _learn(head_a: _Head, head_b: _Head, alignment: Alignment, bin_s: float, bas
         if learn and noisy and learner.identical < learner.pairs:
             fresh = FieldLearner()
             for x, y in pairs_of[topic]:
+                if x[2] is not y[2]:
+                    break  # two schemas (one decoder each): the pass refuses the channel
                 try:
                     ma, mb = x[2](x[1]), y[2](y[1])
                 except Exception:  # a foreign file can hold anything; the pass counts it
