@@ -165,7 +165,8 @@ def late_start(seconds: float) -> Transform:
 def latched_early(topic: str | None = None, seconds: float = 1.0) -> Transform:
     """One latched message logged ``seconds`` before the rest: the first message of ``topic``
     (default: the channel with the fewest messages, the likeliest latched one) gets the log time
-    ``start - seconds`` and is written first, as a logger writes a latched message on subscribing."""
+    ``start - seconds`` and is written first, as a logger writes a latched message on subscribing
+    (a file that starts less than ``seconds`` after 0 is first moved later as a whole)."""
     def apply(c: McapContent) -> None:
         if topic is not None:
             cid = c.channel_id(topic)
@@ -174,9 +175,15 @@ def latched_early(topic: str | None = None, seconds: float = 1.0) -> Transform:
             for m in c.messages:
                 counts[m.channel_id] = counts.get(m.channel_id, 0) + 1
             cid = min(counts, key=lambda k: (counts[k], k))
+        d = round(seconds * NS)
+        if c.start < d:  # log times are unsigned: the whole file moves later instead
+            shift = d - c.start
+            for m in c.messages:
+                m.log_time += shift
+                m.publish_time += shift
         i = next(i for i, m in enumerate(c.messages) if m.channel_id == cid)
         msg = c.messages.pop(i)
-        msg.log_time = c.start - round(seconds * NS) if c.messages else msg.log_time
+        msg.log_time = c.start - d if c.messages else msg.log_time
         c.messages.insert(0, msg)
     return apply
 
@@ -481,3 +488,69 @@ def span_s(path: str | os.PathLike[str]) -> float:
             return (st.message_end_time - st.message_start_time) / NS
         times = [m.log_time for _, _, m in reader.iter_messages(log_time_order=False)]
     return (max(times) - min(times)) / NS if times else math.nan
+
+
+# ------------------------------------------------------------------------------ judging
+
+RIGHT, REFUSED, WARNED_WRONG, SILENT_WRONG = "right", "refused", "warned wrong", "silent wrong"
+VERDICTS = (RIGHT, REFUSED, WARNED_WRONG, SILENT_WRONG)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """How ``rocas.analysis.diff.diff`` answered one case with a known truth."""
+
+    verdict: str
+    module: str | None
+    warnings: tuple[str, ...]
+    detail: str
+
+
+def judge(accident: str | os.PathLike[str], reference: str | os.PathLike[str], truth: str | None,
+          cmg: Any = None) -> Verdict:
+    """Diff ``accident`` against ``reference`` with the public :func:`rocas.analysis.diff.diff`
+    (default settings) and classify the answer against ``truth`` (a module, or None: no module
+    deviated): right; refused (a RocasError, which is not right but not silent either); warned
+    wrong (another answer, with warnings / ``complete`` False); silent wrong (another answer and
+    no warning)."""
+    from rocas.analysis.diff import diff
+    from rocas.errors import RocasError
+
+    try:
+        r = diff(accident, reference, cmg=cmg)
+    except RocasError as exc:
+        return Verdict(REFUSED, None, (), f"{type(exc).__name__}: {exc}")
+    module, warnings = r.deviating_module, tuple(r.warnings)
+    if module == truth:
+        verdict = RIGHT
+    elif warnings or not r.complete:
+        verdict = WARNED_WRONG
+    else:
+        verdict = SILENT_WRONG
+    return Verdict(verdict, module, warnings, f"module {module}" + (f", {len(warnings)} warning(s)"
+                                                                    if warnings else ""))
+
+
+def table(rows: Sequence[tuple[str, Verdict]], title: str = "class") -> str:
+    """Counts per class (rows: (class, verdict)) and a total line: n, right, refused, warned
+    wrong, silent wrong, right %."""
+    classes: dict[str, list[Verdict]] = {}
+    for cls, v in rows:
+        classes.setdefault(cls, []).append(v)
+    width = max([len(title), len("total")] + [len(c) for c in classes])
+    head = f"{title:<{width}}  {'n':>4}  {'right':>5}  {'refused':>7}  {'warned wrong':>12}  " \
+           f"{'silent wrong':>12}  {'right %':>7}"
+    lines = [head, "-" * len(head)]
+
+    def line(name: str, vs: list[Verdict]) -> str:
+        n = len(vs)
+        c = {k: sum(v.verdict == k for v in vs) for k in VERDICTS}
+        pct = 100.0 * c[RIGHT] / n if n else 0.0
+        return f"{name:<{width}}  {n:>4}  {c[RIGHT]:>5}  {c[REFUSED]:>7}  {c[WARNED_WRONG]:>12}  " \
+               f"{c[SILENT_WRONG]:>12}  {pct:>6.1f}%"
+
+    for cls, vs in classes.items():
+        lines.append(line(cls, vs))
+    lines.append("-" * len(head))
+    lines.append(line("total", [v for _, v in rows]))
+    return "\n".join(lines)
