@@ -457,11 +457,12 @@ class Artefact:
     transform: Transform
 
 
-def logging_artefacts(*, deviating_topic: str, other_topic: str, span_s: float, deviation_s: float,
+def logging_artefacts(*, deviating_topic: str, other_topic: str | None, span_s: float, deviation_s: float,
                       seeds: Sequence[int] = (0, 1)) -> list[Artefact]:
     """The logging artefacts of issue 36, for a pair whose truth departs on ``deviating_topic``
     at ``deviation_s`` in a recording of ``span_s`` seconds: every file cut keeps the deviation
-    (and a second after it) inside. ``other_topic`` is a channel of another module."""
+    (and a second after it) inside. ``other_topic`` is a channel of another module (None: the
+    recording has none, and the per-channel artefacts are applied to the deviating one only)."""
     room = span_s - deviation_s - 1.0
     cuts = sorted({c for c in (0.5, min(7.0, room)) if 0.5 <= c <= room})
     out = [Artefact(f"truncate_end[{c:g}s]", "truncate_end", truncate_end(c)) for c in cuts]
@@ -471,6 +472,8 @@ def logging_artefacts(*, deviating_topic: str, other_topic: str, span_s: float, 
     out += [Artefact(f"duplicate#{s}", "duplicate", duplicate(seed=s)) for s in seeds]
     out += [Artefact(f"lose_1%#{s}", "lose_1%", lose(0.01, seed=s)) for s in seeds]
     for label, topic in (("deviating", deviating_topic), ("other", other_topic)):
+        if topic is None:
+            continue
         out.append(Artefact(f"half_rate[{topic}]", f"half_rate[{label}]", half_rate(topic)))
         out.append(Artefact(f"clock+0.5s[{topic}]", f"clock+0.5s[{label}]", clock_offset(topic, 0.5)))
         out.append(Artefact(f"flush_1s[{topic}]", f"flush_1s[{label}]", flush_stamps(topic, 1.0)))
