@@ -148,36 +148,47 @@ class _Pending:
 
     index: int
     scores: list[float]
-    leftover_side: int
-    leftover: list[_Entry]
+    leftover: list[tuple[int, _Entry]]  # (side, entry), in log-time order
     counts: tuple[int, int]
     entered: bool = False
 
 
-def _pair_order(xs: list[_Entry], ys: list[_Entry]) -> tuple[list[_Entry], list[_Entry],
-                                                               list[_Entry]]:
-    """Pair two unequal lists of one bin's messages (both in log-time order): equal payloads
-    first, then each message of the shorter list with the nearest in time of the longer one,
-    in order. Returns (xs paired, ys paired, the longer list's messages left over)."""
-    short_is_x = len(xs) < len(ys)
-    short, long_ = (xs, ys) if short_is_x else (ys, xs)
-    used = [False] * len(long_)
-    match: list[int | None] = [None] * len(short)
-    for i, e in enumerate(short):  # the same message in both: equal payloads
-        for j, f in enumerate(long_):
-            if not used[j] and e[3] and e[3] == f[3]:
+def _match(xs: list[_Entry], ys: list[_Entry], reach_ns: float
+           ) -> tuple[list[tuple[_Entry, _Entry]], list[_Entry], list[_Entry]]:
+    """Pair one bin's messages of a channel (each list in log-time order).
+
+    Two lists of one length whose payloads are equal pair by pair pair in order (every bin
+    of two runs that agree). Otherwise the same message in both (equal payloads) pairs first,
+    then each message left with the nearest in time left in the other list, in order, if it
+    lies within ``reach_ns`` (a message jittered across a bin edge, or whose partner is in
+    the next bin, is not paired with another message). Returns (the pairs, in the accident's
+    order, the accident's and the reference's messages left over).
+    """
+    n = len(xs)
+    if n == len(ys) and all(x[3] == y[3] for x, y in zip(xs, ys, strict=True)):
+        return list(zip(xs, ys, strict=True)), [], []
+    match: list[int | None] = [None] * n
+    used = [False] * len(ys)
+    by_payload: dict[bytes, list[int]] = {}
+    for j, y in enumerate(ys):
+        if y[3]:
+            by_payload.setdefault(y[3], []).append(j)
+    for i, x in enumerate(xs):  # the same message in both runs
+        js = by_payload.get(x[3])
+        while js:
+            j = js.pop(0)
+            if not used[j]:
                 match[i], used[j] = j, True
                 break
-    for i, e in enumerate(short):  # the rest: the nearest in time still free
+    for i, x in enumerate(xs):  # the rest: the nearest in time still free, within reach
         if match[i] is None:
-            free = [j for j in range(len(long_)) if not used[j]]
-            j = min(free, key=lambda j: (abs(long_[j][0] - e[0]), j))
-            match[i], used[j] = j, True
-    order = sorted(range(len(short)), key=lambda i: match[i])  # type: ignore[arg-type, return-value]
-    s_paired = [short[i] for i in order]
-    l_paired = [long_[match[i]] for i in order]  # type: ignore[index]
-    rest = [f for j, f in enumerate(long_) if not used[j]]
-    return (s_paired, l_paired, rest) if short_is_x else (l_paired, s_paired, rest)
+            best = min((j for j in range(len(ys)) if not used[j]),
+                       key=lambda j: (abs(ys[j][0] - x[0]), j), default=None)
+            if best is not None and abs(ys[best][0] - x[0]) <= reach_ns:
+                match[i], used[best] = best, True
+    pairs = [(x, ys[j]) for x, j in zip(xs, match, strict=True) if j is not None]
+    return (pairs, [x for x, j in zip(xs, match, strict=True) if j is None],
+            [y for j, y in enumerate(ys) if not used[j]])
 
 
 @dataclass
@@ -186,6 +197,7 @@ class _Acc:
     :meth:`finish` decides, once both files are read, whether the other run was silent on
     the channel around it (it then scores 1) or only missed it (lost, or another rate)."""
 
+    reach_ns: float = 0.05e9  # how far apart in time two differing messages may pair [ns]
     bins: list[int] = field(default_factory=list)
     sums: list[float] = field(default_factory=list)
     paired: list[int] = field(default_factory=list)
@@ -204,7 +216,7 @@ class _Acc:
             self.bins.append(p.index)
             self.sums.append(sum(p.scores))
             self.paired.append(len(p.scores))
-            self.unpaired.append([(e[0], p.leftover_side) for e in p.leftover])
+            self.unpaired.append([(e[0], side) for side, e in p.leftover])
             self.counts.append(p.counts)
             self.entered.append(p.entered)
         self.pending = None
@@ -215,37 +227,39 @@ class _Acc:
     ) -> None:
         """Score bin ``index`` (bins arrive in increasing order)."""
         counts = (len(a_msgs), len(b_msgs))
-        if len(a_msgs) != len(b_msgs) and a_msgs and b_msgs:
-            a_msgs, b_msgs, rest = _pair_order(a_msgs, b_msgs)
-            side = ACCIDENT if counts[0] > counts[1] else REFERENCE
-        else:
-            rest = []
-            side = ACCIDENT if len(a_msgs) > len(b_msgs) else REFERENCE
-        paired = min(len(a_msgs), len(b_msgs))
-        if self.equal_before is not None and paired and a_msgs[0][3] != b_msgs[0][3]:
+        pairs, left_a, left_b = _match(a_msgs, b_msgs, self.reach_ns)
+        if self.equal_before is not None and pairs and pairs[0][0][3] != pairs[0][1][3]:
             # decoded once here: their score and whether content entered both read them
-            a_msgs[0], b_msgs[0] = _decoded(a_msgs[0]), _decoded(b_msgs[0])
-        scores = [_score(x, y, tol) for x, y in zip(a_msgs[:paired], b_msgs[:paired], strict=True)]
+            pairs[0] = (_decoded(pairs[0][0]), _decoded(pairs[0][1]))
+        scores = [_score(x, y, tol) for x, y in pairs]
         # decoded now: an unpaired message counts only if it decodes, and may pair next bin
-        leftover = [_decoded(e) for e in
-                    (rest or (a_msgs if side == ACCIDENT else b_msgs)[paired:])]
-        equal = paired > 0 and counts[0] == counts[1] and not any(scores)
-        entered = (self.equal_before is not None and paired > 0 and counts[0] == counts[1]
-                   and not equal and _entered(self.equal_before, (a_msgs[0], b_msgs[0])))
-        self.equal_before = (a_msgs[0], b_msgs[0]) if equal else None
+        leftover = sorted([(ACCIDENT, _decoded(e)) for e in left_a]
+                          + [(REFERENCE, _decoded(e)) for e in left_b], key=lambda se: se[1][0])
+        equal = bool(pairs) and counts[0] == counts[1] and not any(scores)
+        entered = (self.equal_before is not None and bool(pairs) and counts[0] == counts[1]
+                   and not equal and _entered(self.equal_before, pairs[0]))
+        self.equal_before = pairs[0] if equal else None
         p = self.pending
-        if (
-            adjacent and p is not None and p.index == index - 1 and p.leftover and leftover
-            and p.leftover_side != side
-        ):
-            k = min(len(p.leftover), len(leftover))
-            for x, y in zip(p.leftover[:k], leftover[:k], strict=True):
-                a, b = (x, y) if p.leftover_side == ACCIDENT else (y, x)
-                p.scores.append(_score(a, b, tol))
-            p.leftover = p.leftover[k:]
-            leftover = leftover[k:]
+        if adjacent and p is not None and p.index == index - 1 and p.leftover and leftover:
+            # a message left in the last bin pairs with the other run's nearest message left
+            # in this one, within reach (one jittered across the edge between them)
+            taken: set[int] = set()
+            kept: list[tuple[int, _Entry]] = []
+            for side, x in p.leftover:
+                best = min((k for k, (s2, y) in enumerate(leftover)
+                            if s2 != side and k not in taken),
+                           key=lambda k: (abs(leftover[k][1][0] - x[0]), k), default=None)
+                if best is not None and abs(leftover[best][1][0] - x[0]) <= self.reach_ns:
+                    taken.add(best)
+                    y = leftover[best][1]
+                    a, b = (x, y) if side == ACCIDENT else (y, x)
+                    p.scores.append(_score(a, b, tol))
+                else:
+                    kept.append((side, x))
+            p.leftover = kept
+            leftover = [se for k, se in enumerate(leftover) if k not in taken]
         self.finish_pending()
-        self.pending = _Pending(index, scores, side, leftover, counts, entered)
+        self.pending = _Pending(index, scores, leftover, counts, entered)
 
     def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
                ) -> tuple[list[int], list[float], list[tuple[int, int]], list[bool],
@@ -541,7 +555,7 @@ def _one_pass(
                 ys.sort(key=_LOG_TIME_THEN_ARRIVAL)
                 a = acc.get(topic)
                 if a is None:
-                    a = acc[topic] = _Acc()
+                    a = acc[topic] = _Acc(reach_ns=bin_ns / 2)
                 a.add_bin(b, xs, ys, rules.get(topic, tolerance), adjacent_pairing)
         scored_below = max(scored_below, below)
 

@@ -87,11 +87,16 @@ def test_a_channel_at_half_rate_pairs_each_message_with_its_nearest_partner(tmp_
     assert res.accounts["/control"].outside == (1, 0)  # 2.9 s: after the reference's last
 
 
-def test_kth_message_pairs_with_kth(tmp_path):
+def test_the_same_message_pairs_with_itself_and_the_rest_by_time(tmp_path):
+    # the same messages at other times within a bin (jitter, another logging order) pair
+    # with themselves
     a = _write(tmp_path / "a.mcap", [0.0, 0.01, 0.02], [1, 2, 3])
     b = _write(tmp_path / "b.mcap", [0.0, 0.01, 0.02], [1, 3, 2])
-    s = _series(tmp_path, a, b).series["/control"]
-    assert s.mdr[0] == pytest.approx((0 + 2 / N_FIELDS) / 3)
+    assert _series(tmp_path, a, b).series["/control"].mdr[0] == 0.0
+    # differing messages pair in time order (the k-th with the k-th at equal times)
+    c = _write(tmp_path / "c.mcap", [0.0, 0.01, 0.02], [1, 5, 6])
+    assert _series(tmp_path, a, c).series["/control"].mdr[0] == pytest.approx(
+        (0 + 2 / N_FIELDS) / 3)
 
 
 def test_a_message_that_slipped_over_a_bin_edge_pairs_with_its_twin(tmp_path):
