@@ -192,13 +192,19 @@ def find_initial_module(
     depth = _depths(upstream, start) if start in succ else {}
     # a module that reads the control channel reports the vehicle's response to it (the
     # chassis): without a change point on that channel, its deviation may be the commands'
+    # or the world's. With the commands the same in both runs and no other module departing,
+    # nothing else in the graph explains it, and it is named (the plant's own output changed)
     feedback = {n for k, n in succ.get(start, ()) if k == MODULE} if fallback else set()
-    reachable = frozenset(n for k, n in depth if k == MODULE and n not in feedback)
-    candidates = [
-        (tm, -depth.get((MODULE, m), 0), m)
-        for m in reachable
-        if (tm := t_star[(MODULE, m)]) is not None and explains(tm)
-    ]
+
+    def candidates_without(left_out: set[str]) -> tuple[frozenset[str], list]:
+        reach = frozenset(n for k, n in depth if k == MODULE and n not in left_out)
+        return reach, [(tm, -depth.get((MODULE, m), 0), m) for m in reach
+                       if (tm := t_star[(MODULE, m)]) is not None and explains(tm)]
+
+    reachable, candidates = candidates_without(feedback)
+    if not candidates and feedback and control_onset_s is None:
+        feedback = set()
+        reachable, candidates = candidates_without(feedback)
     deviating = min(candidates)[2] if candidates else None
 
     path: tuple[str, ...] = ()

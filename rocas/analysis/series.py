@@ -507,12 +507,12 @@ def _one_pass(
             o = offsets[side][topic] = 0 if side == ACCIDENT else alignment.offset_ns(topic)
         return o
 
-    def check_span(side: int, t: int) -> None:
+    def check_span(side: int, t: int, t_aligned: int) -> None:
         if t < first[side]:
             first[side] = t
         if t > last[side]:
             last[side] = t
-        if last[side] - first[side] > max_span_ns or abs(t - origin) > max_span_ns:
+        if last[side] - first[side] > max_span_ns or abs(t_aligned - origin) > max_span_ns:
             lo, hi = first[side], last[side]
             raise RecordingError(
                 f"{recs[side].path}: log times span {(hi - lo) / 86400e9:.4g} days "
@@ -564,8 +564,9 @@ def _one_pass(
         msg = next(streams[side], None)
         if msg is None:
             return None, math.inf
-        check_span(side, msg[1])
-        return msg, bin_of(side, msg[1] + offset_of(side, msg[0].topic))
+        t_al = msg[1] + offset_of(side, msg[0].topic)
+        check_span(side, msg[1], t_al)
+        return msg, bin_of(side, t_al)
 
     (h0, b0), (h1, b1) = head(0), head(1)
     heads: list[_Streamed | None] = [h0, h1]

@@ -165,7 +165,8 @@ def test_exclusions_say_later_only_when_later_and_name_a_tie_by_name():
 def _networkx_walk(cmg, t_star, control, delta):
     """Algorithm 1's reachable set, depths and walk computed with networkx on ``cmg.graph``
     (the walk rocas takes must be the one networkx's shortest_path takes). Without a change
-    point on the control channel, the whole graph less the control channel's readers."""
+    point on the control channel, the whole graph less the control channel's readers (with
+    them when no other module departed)."""
     import networkx as nx
 
     start = (CHANNEL, control)
@@ -181,6 +182,10 @@ def _networkx_walk(cmg, t_star, control, delta):
     readers = set(cmg.graph.successors(start)) if fallback else set()
     reachable = frozenset(n for k, n in nx.descendants(rev, start)
                           if k == MODULE and (k, n) not in readers)
+    if readers and not any(t_star[(MODULE, m)] is not None for m in reachable):
+        # the commands are the same in both runs and nothing else departed: their readers
+        # (the plant's own output) are named too
+        reachable = frozenset(n for k, n in nx.descendants(rev, start) if k == MODULE)
     depth = nx.single_source_shortest_path_length(rev, start)
     return reachable, depth, rev
 
@@ -272,3 +277,16 @@ def test_a_walk_goes_on_past_a_named_modules_window_only_when_asked_and_from_who
     assert past_the_window(cmg, t, r, 3.0, written_by=["control"]) is r
     assert past_the_window(cmg, APPENDIX_A, _run(APPENDIX_A), 3.0, written_by=["perception"]) \
         .deviating_module == "prediction"
+
+
+def test_a_reader_of_identical_commands_is_named_when_nothing_else_departed():
+    # the commands are the same in both runs (no onset) and only canbus, which reads them,
+    # departed: nothing else in the graph explains its change, so it is the answer
+    t = dict.fromkeys(APPENDIX_A)
+    t["/apollo/canbus/chassis"] = 1.5
+    r = _run(t)
+    assert r.deviating_module == "canbus"
+    # when the commands differ, a reader's change may be the response to them: not named
+    r = find_initial_module(build_cmg([], APOLLO), t, "/apollo/control", 3.0,
+                            control_onset_s=1.4)
+    assert r.deviating_module is None
