@@ -31,11 +31,14 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.noise import (
     MIN_START_PAIRS,
     FieldLearner,
     FieldRules,
+    leaf_pairs,
     leaf_paths,
     noisy_start,
     with_ignored,
@@ -73,6 +76,10 @@ class Alignment:
         origin_ns: t = 0 of the comparison, on the accident's clock [ns]: the later of the
             two files' first messages.
         starts_s: (accident, reference) first message of each file [s relative to t = 0].
+        flushed: (side, topic, the channel's period [s], the flush period [s]) of each channel
+            whose log times in that recording are flush times (most of its messages share
+            their log time with the one before): its messages are spread back over the flush
+            period in their order, one period apart (:func:`flushed_channels`).
     """
 
     method: str
@@ -81,6 +88,13 @@ class Alignment:
     channel_offsets_s: dict[str, float]
     origin_ns: int
     starts_s: tuple[float, float]
+    flushed: tuple[tuple[int, str, float, float], ...] = ()
+
+    def flush_plan(self) -> dict[tuple[int, str], tuple[int, int]]:
+        """(side, topic) -> (the channel's period, the flush period) [ns] for the channels
+        whose log times are the times their buffer was flushed in that recording."""
+        return {(side, topic): (round(p * 1e9), round(f * 1e9))
+                for side, topic, p, f in self.flushed}
 
     def offset_ns(self, topic: str) -> int:
         """The offset for a reference message of ``topic`` [ns]."""
@@ -89,7 +103,10 @@ class Alignment:
     def to_json(self) -> dict[str, Any]:
         return {"method": self.method, "offset_s": self.offset_s, "matches": self.matches,
                 "channel_offsets_s": dict(sorted(self.channel_offsets_s.items())),
-                "starts_s": {"accident": self.starts_s[0], "reference": self.starts_s[1]}}
+                "starts_s": {"accident": self.starts_s[0], "reference": self.starts_s[1]},
+                "flushed": [{"recording": ("accident", "reference")[side], "topic": topic,
+                             "period_s": p, "flush_period_s": f}
+                            for side, topic, p, f in self.flushed]}
 
 
 @dataclass
@@ -233,6 +250,9 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
                 how = "first messages"
                 offset = _median_int([head_a.topics[t].first_ns - head_b.topics[t].first_ns
                                       for t in shared])
+                best = _best_match(head_a, head_b, shared, offset, bin_s)
+                if best is not None:
+                    how, offset = "best match of content", best
             else:
                 how, offset = "file starts", sa - sb
     elif method == "first":
@@ -249,10 +269,127 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
         how, offset = f"first message of {method}", ta.first_ns - tb.first_ns
     origin = max(sa, sb + offset)
     alignment = Alignment(how, offset / 1e9, matches, channel, origin,
-                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9))
+                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9),
+                          flushed_channels(head_a, head_b))
     rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
                           list(ignore))
     return alignment, rules, noisy, tuple(warnings)
+
+
+#: A channel is flushed in a recording when at least this fraction of its messages in the head
+#: share their log time with the message before.
+FLUSHED_FRACTION = 0.5
+
+
+def _times(th: _TopicHead) -> np.ndarray:
+    return np.sort(np.array([t for t, _, _ in th.kept], dtype=np.int64))
+
+
+def flushed_channels(head_a: _Head, head_b: _Head) -> tuple[tuple[int, str, float, float], ...]:
+    """The channels stamped at flush time in one recording and not in the other: (side, topic,
+    the channel's period in the other recording, the flush period) [s]. Their log times say
+    when a logger wrote a buffer, not when each message was published; the other recording's
+    period and the order within each flush give the messages back their times."""
+    out = []
+    heads = (head_a, head_b)
+    for side in (0, 1):
+        for topic, th in sorted(heads[side].topics.items()):
+            other = heads[1 - side].topics.get(topic)
+            if other is None or len(th.kept) < 10 or len(other.kept) < 10:
+                continue
+            mine, theirs = np.diff(_times(th)), np.diff(_times(other))
+            if (np.count_nonzero(mine == 0) < FLUSHED_FRACTION * len(mine)
+                    or np.count_nonzero(theirs == 0) >= FLUSHED_FRACTION * len(theirs)):
+                continue
+            gaps = mine[mine > 0]
+            period = float(np.median(theirs[theirs > 0])) if np.any(theirs > 0) else 0.0
+            if len(gaps) and period > 0:
+                out.append((side, topic, period / 1e9, float(np.median(gaps)) / 1e9))
+    return tuple(out)
+
+
+#: How far from the first-message offset the best match of content is looked for [s].
+MATCH_RANGE_S = 3.0
+#: The best match of content replaces the first-message offset only when its cost is below this
+#: fraction of that offset's cost.
+MATCH_GAIN = 0.5
+
+
+def _signals(th: _TopicHead) -> tuple[np.ndarray, np.ndarray] | None:
+    """A topic's head as (log times [ns], (n, k) float content): every float leaf of each
+    message that decodes, for the messages with the most common number of them (k >= 1)."""
+    rows: list[tuple[int, np.ndarray]] = []
+    for t, payload, decode in th.kept:
+        try:
+            message = decode(payload)
+        except Exception:  # noqa: BLE001 - a foreign file can hold anything
+            continue
+        parts = [np.ravel(np.asarray(v, dtype=np.float64))
+                 for _, is_float, v, _ in leaf_pairs(message, message, "", False) if is_float]
+        if parts:
+            rows.append((t, np.concatenate(parts)))
+    if len(rows) < 10:
+        return None
+    sizes: dict[int, int] = {}
+    for _, v in rows:
+        sizes[len(v)] = sizes.get(len(v), 0) + 1
+    k = max(sizes, key=lambda n: (sizes[n], n))
+    kept = [(t, v) for t, v in rows if len(v) == k]
+    kept.sort(key=lambda tv: tv[0])
+    return (np.array([t for t, _ in kept], dtype=np.int64),
+            np.stack([v for _, v in kept]))
+
+
+def _match_cost(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray],
+                offset: int, reach: float) -> float | None:
+    """Mean scaled difference of each accident message's float content from the reference
+    message nearest to it with ``offset`` applied (within ``reach`` ns); None when fewer than
+    five pairs."""
+    ta, va = a
+    tb, vb = b[0] + offset, b[1]
+    k = np.clip(np.searchsorted(tb, ta), 1, len(tb) - 1)
+    nearer = np.where(np.abs(tb[k - 1] - ta) <= np.abs(tb[k] - ta), k - 1, k)
+    close = np.abs(tb[nearer] - ta) <= reach
+    if close.sum() < 5:
+        return None
+    scale = np.nanstd(np.concatenate([va, vb]), axis=0)
+    use = np.isfinite(scale) & (scale > 0)
+    if not use.any():
+        return None
+    with np.errstate(invalid="ignore"):
+        d = np.abs(va[close][:, use] - vb[nearer[close]][:, use]) / scale[use]
+    return float(np.nanmean(d))
+
+
+def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin_s: float
+                ) -> int | None:
+    """The offset near ``start`` (within :data:`MATCH_RANGE_S`, in steps of half a bin) at
+    which the two heads' float content matches best, summed over the topics that move; None
+    when it is not clearly better (:data:`MATCH_GAIN`) than ``start`` itself."""
+    pairs = []
+    for t in topics:
+        a, b = _signals(head_a.topics[t]), _signals(head_b.topics[t])
+        if a is not None and b is not None and a[1].shape[1] == b[1].shape[1]:
+            pairs.append((a, b))
+    if not pairs:
+        return None
+    reach = bin_s * 1e9 / 2
+    step = round(bin_s * 1e9 / 2)
+    n = round(MATCH_RANGE_S * 1e9 / step)
+
+    def cost(offset: int) -> float | None:
+        parts = [c for a, b in pairs if (c := _match_cost(a, b, offset, reach)) is not None]
+        return sum(parts) / len(parts) if len(parts) * 2 >= len(pairs) else None
+
+    base = cost(start)
+    scored = [(c, abs(i), start + i * step) for i in range(-n, n + 1)
+              if (c := cost(start + i * step)) is not None]
+    if not scored or base is None:
+        return None
+    c, _, best = min(scored)
+    if c < MATCH_GAIN * base:
+        return best
+    return None
 
 
 def _start_pairs(ta: _TopicHead, tb: _TopicHead, off: int, lo: float, hi: float, width: float

@@ -28,7 +28,7 @@ from rocas.analysis.entries import change_points_from, entries_to_pass
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.noise import FieldRules
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module, past_the_window
-from rocas.analysis.series import ChannelAccount, ChannelSeries, compute_series
+from rocas.analysis.series import REPEAT_S, ChannelAccount, ChannelSeries, compute_series
 from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.reader import ChannelInfo, Recording, open_recording
@@ -555,7 +555,7 @@ def _account_warnings(res: Any) -> tuple[str, ...]:
     if rep:
         n = sum(x + y for _, (x, y) in rep)
         out.append(f"{n} messages were logged twice (the same payload again within "
-                   f"{res.bin_s / 4 * 1000:g} ms) and counted once: {listing(rep)}")
+                   f"{REPEAT_S * 1000:g} ms) and counted once: {listing(rep)}")
     for t, a in accounts:
         for side, role, other in ((0, "accident", "reference"), (1, "reference", "accident")):
             stop = a.stops_s[side]

@@ -160,6 +160,10 @@ def _leaf_pairs(a: Any, b: Any, path: str, is_float: bool
     yield path, is_float or _float_value(a), a, b
 
 
+#: every leaf of two trees of one shape (public name for :mod:`rocas.analysis.align`)
+leaf_pairs = _leaf_pairs
+
+
 class FieldLearner:
     """Accumulates one channel's start pairs and turns them into :class:`FieldRules`."""
 

@@ -50,6 +50,9 @@ from rocas.errors import RecordingError
 from rocas.recording.reader import ChannelInfo, Recording
 
 ACCIDENT, REFERENCE = 0, 1
+#: A message whose payload equals the one before it on its channel, logged within this of it,
+#: was logged twice [s].
+REPEAT_S = 0.002
 #: Longest stretch of log time one recording may span [s]. A longer one is a clock that
 #: wrapped past 2**64 ns or a corrupted timestamp, never a drive: it is refused, since its
 #: bins (and the reorder window it would need) say nothing about the run.
@@ -499,7 +502,7 @@ def _one_pass(
     last_payload: tuple[dict[str, tuple[bytes, int]], dict[str, tuple[bytes, int]]] = ({}, {})
     repeated: tuple[dict[str, int], dict[str, int]] = ({}, {})
     before: tuple[dict[str, int], dict[str, int]] = ({}, {})
-    repeat_ns = bin_ns / 4
+    repeat_ns = REPEAT_S * 1e9
 
     def offset_of(side: int, topic: str) -> int:
         o = offsets[side].get(topic)
@@ -559,11 +562,29 @@ def _one_pass(
                 a.add_bin(b, xs, ys, rules.get(topic, tolerance), adjacent_pairing)
         scored_below = max(scored_below, below)
 
+    flush_plan = alignment.flush_plan()
+    # (side, topic) -> [this flush's log time, the last flush's, index within this flush]
+    flushes: dict[tuple[int, str], list[int]] = {}
+
+    def unflushed(side: int, topic: str, t: int) -> int:
+        """A flushed channel's message back at its time: one channel period after the one
+        before it in its flush, counted from the flush before (module docstring of align)."""
+        period, flush = flush_plan[(side, topic)]
+        st = flushes.get((side, topic))
+        if st is None:
+            st = flushes[(side, topic)] = [t, t - flush, -1]
+        if t != st[0]:
+            st[1], st[0], st[2] = st[0], t, -1
+        st[2] += 1
+        return min(t, st[1] + (st[2] + 1) * period)
+
     def head(side: int) -> tuple[_Streamed | None, float]:
         """The side's next message and its bin (inf at the end)."""
         msg = next(streams[side], None)
         if msg is None:
             return None, math.inf
+        if flush_plan and (side, msg[0].topic) in flush_plan:
+            msg = (msg[0], unflushed(side, msg[0].topic, msg[1]), *msg[2:])
         t_al = msg[1] + offset_of(side, msg[0].topic)
         check_span(side, msg[1], t_al)
         return msg, bin_of(side, t_al)
