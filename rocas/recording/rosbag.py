@@ -120,7 +120,8 @@ class Rosbag2Recording(ForeignRecording):
         readers: list[Any] = []
         try:
             for part in _storage_files(self.path):
-                reader = Reader(part)
+                # a sqlite3 file whatever its name ends with (rosbags goes by the suffix)
+                reader = Reader(part) if part.is_dir() else _Db3(part)
                 readers.append(reader)
                 reader.open()
         except Exception as exc:
@@ -169,6 +170,36 @@ class Rosbag2Recording(ForeignRecording):
             for reader in readers:
                 if reader.is_open:
                     reader.close()
+
+
+class _Db3:
+    """rosbags' sqlite3 storage reader with the interface of its ``Reader``, for a ``.db3``
+    file whatever its name."""
+
+    def __init__(self, path: Path) -> None:
+        from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+        self.storage = Sqlite3Reader(path)
+        self.is_open = False
+
+    def open(self) -> None:
+        self.storage.open()
+        self.is_open = True
+
+    def close(self) -> None:
+        self.is_open = False
+        self.storage.close()
+
+    @property
+    def connections(self) -> list[Any]:
+        return list(self.storage.connections)
+
+    @property
+    def message_count(self) -> int:
+        return int(self.storage.metadata.message_count)
+
+    def messages(self) -> Iterator[tuple[Any, int, bytes]]:
+        return self.storage.messages(self.storage.connections)
 
 
 def _storage_files(path: Path) -> list[Path]:
