@@ -43,7 +43,12 @@ def ros1_name(msgtype: str) -> str:
 
 
 class Ros1Recording(ForeignRecording):
-    """A ROS 1 bag (format 2.0), read through its index with ``rosbags.rosbag1``."""
+    """A ROS 1 bag (format 2.0), read through its index with ``rosbags.rosbag1``.
+
+    A bag whose index is missing (its recorder was stopped before writing it) or unreadable
+    (the file was cut short or damaged) is read chunk by chunk in file order instead
+    (:mod:`rocas.recording.ros1_chunks`), up to the first damage, with warnings that say so.
+    """
 
     format = "ros1"
     profile = "ros1"
@@ -51,7 +56,15 @@ class Ros1Recording(ForeignRecording):
     def __init__(self, path: str | os.PathLike[str], size: int,
                  decoders: DecoderCache | None = None) -> None:
         super().__init__(path, size, decoders)
-        self._open().close()  # fail now, with one line, if the bag cannot be read at all
+        #: why the index could not be used (the chunks are then read in file order), or None
+        self.index_problem: str | None = None
+        try:
+            self._open().close()
+        except RecordingError:
+            self.index_problem = self._open_error
+            self.scan()  # fail now, with one line, if the chunks hold nothing either
+            if not self.channels:
+                raise
 
     def _open(self) -> Any:
         from rosbags.rosbag1 import Reader
@@ -60,14 +73,64 @@ class Ros1Recording(ForeignRecording):
         try:
             reader.open()
         except Exception as exc:
+            self._open_error = describe_error(exc)
             raise RecordingError(
-                f"{self.path} is a ROS 1 bag that cannot be read ({describe_error(exc)})",
+                f"{self.path} is a ROS 1 bag that cannot be read ({self._open_error})",
                 "if its recorder was stopped before it finished, index it with 'rosbag reindex' "
                 "(ROS 1) and try again",
             ) from None
         for conn in reader.connections:
             self._declare(self._channel(conn))
         return reader
+
+    def _walk(self) -> Iterator[Walked]:
+        if self.index_problem is not None:
+            yield from self._walk_chunks()
+            return
+        reader = self._open()
+        try:
+            infos = {conn.id: self.channels[conn.id] for conn in reader.connections}
+            total = max(1, sum(conn.msgcount for conn in reader.connections))
+            yield from _timed(self, reader.messages(), infos, total)
+        finally:
+            reader.close()
+
+    def _walk_chunks(self) -> Iterator[Walked]:
+        import mmap
+
+        from rocas.recording.ros1_chunks import BagDamage, Connection, walk_chunks
+
+        report = self.report
+        report.summary_problem = (
+            f"the bag's index cannot be used ({self.index_problem}); its chunks were read in "
+            "file order instead")
+        infos: dict[int, ChannelInfo] = {}
+        with open(self.path, "rb") as f:
+            mm = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
+        walk = walk_chunks(mm)
+        try:
+            for item in walk:
+                if isinstance(item, Connection):
+                    infos[item.id] = self._declare(_chunk_channel(item))
+                    continue
+                cid, t, data = item
+                ch = infos.get(cid)
+                if ch is None:
+                    report.unknown_channel_messages += 1
+                    continue
+                yield ch, t, t, 0, bytes(data)
+        except BagDamage as exc:
+            self._stop(exc.offset, exc.reason)
+            return
+        finally:
+            walk.close()
+            del walk
+            try:
+                mm.close()
+            except BufferError:  # a view still held: the map closes when it is collected
+                pass
+        report.bytes_read = self.size
+        report.complete = True
 
     def _channel(self, conn: Any) -> ChannelInfo:
         meta: dict[str, str] = {}
@@ -83,14 +146,21 @@ class Ros1Recording(ForeignRecording):
             metadata=meta, schema_id=0,
         )
 
-    def _walk(self) -> Iterator[Walked]:
-        reader = self._open()
-        try:
-            infos = {conn.id: self.channels[conn.id] for conn in reader.connections}
-            total = max(1, sum(conn.msgcount for conn in reader.connections))
-            yield from _timed(self, reader.messages(), infos, total)
-        finally:
-            reader.close()
+
+
+def _chunk_channel(conn: Any) -> ChannelInfo:
+    """The channel of a connection record read by :mod:`rocas.recording.ros1_chunks`."""
+    fields = conn.fields
+    meta: dict[str, str] = {}
+    if fields.get("callerid"):
+        meta[ROS1_CALLERID_KEY] = fields["callerid"].decode()
+    if "latching" in fields:
+        meta["latching"] = str(int(fields["latching"].decode() or "0"))
+    return ChannelInfo(
+        id=conn.id, topic=conn.topic, message_encoding="ros1",
+        schema_name=ros1_name(fields.get("type", b"").decode()), schema_encoding="ros1msg",
+        schema_data=fields.get("message_definition", b""), metadata=meta, schema_id=0,
+    )
 
 
 class Rosbag2Recording(ForeignRecording):

@@ -218,15 +218,45 @@ def test_a_changed_channel_is_found_across_formats(tmp_path):
 
 
 # -- damage ----------------------------------------------------------------------------------
-def test_a_truncated_bag_is_refused_in_one_line(tmp_path, rocas):
+def test_a_truncated_bag_keeps_what_was_read_and_warns(tmp_path, rocas):
     cut = tmp_path / "cut.bag"
-    cut.write_bytes(BAG.read_bytes()[: BAG.stat().st_size // 2])
+    cut.write_bytes(BAG.read_bytes()[: BAG.stat().st_size // 2])  # inside its one chunk
+    rec = open_recording(cut)
+    assert sum(1 for _ in rec.decoded()) == 4899
+    assert rec.report.truncated and not rec.report.intact
+    warnings = rec.warnings("cut.bag")
+    assert any("recording is truncated (the file ends inside the record" in w for w in warnings)
+    assert any("index cannot be used" in w for w in warnings)
+    full = open_recording(BAG).scan()
+    assert {c.topic: (c.metadata, c.schema_data) for c in rec.channels.values()} == {
+        c.topic: (c.metadata, c.schema_data) for c in full.channels.values()}
+    with pytest.raises(RecordingError, match="annotate copies complete recordings only"):
+        annotate_recording(cut, tmp_path / "out.mcap", {})
+    # a bag cut before any complete connection: one line
+    tiny = tmp_path / "tiny.bag"
+    tiny.write_bytes(BAG.read_bytes()[:5000])
     with pytest.raises(RecordingError, match="ROS 1 bag that cannot be read") as info:
-        open_recording(cut)
+        open_recording(tiny)
     assert "rosbag reindex" in info.value.hint
-    res = rocas("diff", cut, BAG)
+    res = rocas("diff", tiny, BAG)
     lines = [ln for ln in res.stderr.splitlines() if ln.startswith("rocas: error:")]
     assert res.code == 3 and len(lines) == 1 and "Traceback" not in res.stderr
+
+
+def test_an_unindexed_bag_is_read_chunk_by_chunk(tmp_path):
+    import struct
+
+    data = bytearray(BAG.read_bytes())
+    at = data.index(b"index_pos=") + len("index_pos=")
+    data[at : at + 8] = struct.pack("<Q", 0)  # what a recorder stopped early leaves
+    bag = tmp_path / "active.bag"
+    bag.write_bytes(bytes(data))
+    rec = open_recording(bag)
+    assert rec.index_problem is not None and "not indexed" in rec.index_problem
+    first = _first(rec)
+    assert rec.report.complete and not rec.report.truncated
+    assert sum(st.decoded for st in rec.report.channel_stats.values()) == 8647
+    assert first["/turtle1/pose"].x == pytest.approx(5.544444561004639)
 
 
 def test_a_truncated_record_keeps_what_was_read_and_warns(tmp_path):
