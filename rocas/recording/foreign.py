@@ -131,15 +131,28 @@ class ForeignRecording:
     def undecoded(self) -> Iterator[tuple[ChannelInfo, int, bytes, Callable[[bytes], Any]]]:
         """As :meth:`rocas.recording.reader.Recording.undecoded`: (channel, log time [ns],
         payload, decoder) of every message rocas has a decoder for, not decoded."""
-        decoders = self._decoders
-        for ch, log_time, _publish, _sequence, data in self._attributed():
-            stats = self.report.channel_stats[ch.topic]
-            decode = decoders[ch.id] if ch.id in decoders else self._decoder(ch)
-            if decode is None:
-                stats.skipped_encoding += 1
+        self.report = ReadReport(bytes_total=self.size)
+        stats = self.report.channel_stats
+        for info in self.channels.values():
+            stats.setdefault(info.topic, ChannelStats())
+        # channel id -> (its ChannelInfo, its stats, its decoder) while the declaration stands
+        known: dict[int, tuple[ChannelInfo, ChannelStats, Any]] = {}
+        for ch, log_time, _publish, _sequence, data in self._walk():
+            entry = known.get(ch.id)
+            if entry is None or entry[0] is not ch:
+                st = stats.get(ch.topic)
+                if st is None:
+                    st = stats[ch.topic] = ChannelStats()
+                decode = self._decoders[ch.id] if ch.id in self._decoders else self._decoder(ch)
+                entry = known[ch.id] = (ch, st, decode)
+            st = entry[1]
+            st.messages += 1
+            if entry[2] is None:
+                st.skipped_encoding += 1
                 continue
-            stats.decoded += 1
-            yield ch, log_time, data, decode
+            st.decoded += 1
+            yield ch, log_time, data, entry[2]
+        self._scanned = True
 
     def scan(self) -> ForeignRecording:
         """Read the file once to learn its channels and damage; returns self."""

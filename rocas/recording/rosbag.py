@@ -21,7 +21,7 @@ sequence number, so those are the log time and 0. Messages come in log-time orde
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -31,9 +31,6 @@ from rocas.recording.decoding import DecoderCache
 from rocas.recording.foreign import ForeignRecording, Walked
 from rocas.recording.reader import ChannelInfo, describe_error
 from rocas.recording.topology import ROS1_CALLERID_KEY
-
-#: How often a pass updates ``report.bytes_read`` [messages].
-_PROGRESS_EVERY = 256
 
 
 def ros1_name(msgtype: str) -> str:
@@ -85,15 +82,11 @@ class Ros1Recording(ForeignRecording):
 
     def _walk(self) -> Iterator[Walked]:
         if self.index_problem is not None:
-            yield from self._walk_chunks()
-            return
+            return self._walk_chunks()
         reader = self._open()
-        try:
-            infos = {conn.id: self.channels[conn.id] for conn in reader.connections}
-            total = max(1, sum(conn.msgcount for conn in reader.connections))
-            yield from _timed(self, reader.messages(), infos, total)
-        finally:
-            reader.close()
+        infos = {conn.id: self.channels[conn.id] for conn in reader.connections}
+        total = max(1, sum(conn.msgcount for conn in reader.connections))
+        return _timed(self, reader.messages(), infos, total, close=reader.close)
 
     def _walk_chunks(self) -> Iterator[Walked]:
         import mmap
@@ -225,6 +218,15 @@ class Rosbag2Recording(ForeignRecording):
 
     def _walk(self) -> Iterator[Walked]:
         readers = self._open()
+        if len(readers) == 1:  # one generator less per message
+            reader = readers[0]
+            infos = {conn.id: self.channels[self._ids[(conn.topic, conn.msgtype)]]
+                     for conn in reader.connections}
+            return _timed(self, reader.messages(), infos, max(1, int(reader.message_count)),
+                          close=reader.close)
+        return self._walk_files(readers)
+
+    def _walk_files(self, readers: list[Any]) -> Iterator[Walked]:
         try:
             total = max(1, sum(int(r.message_count) for r in readers))
             done = 0
@@ -292,13 +294,14 @@ def _storage_files(path: Path) -> list[Path]:
 
 def _timed(rec: ForeignRecording, messages: Iterator[tuple[Any, int, bytes]],
            infos: dict[int, ChannelInfo], total: int, done: int = 0,
-           last: bool = True) -> Iterator[Walked]:
+           last: bool = True, close: Callable[[], None] | None = None) -> Iterator[Walked]:
     """The walk over rosbags' ``(connection, log time [ns], payload)``, with progress and a
     stop (and warning) where the storage turns out damaged.
 
     Args:
         total: messages expected in the whole recording; done: read before this file.
         last: whether this is the recording's last file (the pass is then complete).
+        close: called when the walk ends (closes the reader).
 
     Returns (as the generator's value): the messages this file yielded.
     """
@@ -308,12 +311,15 @@ def _timed(rec: ForeignRecording, messages: Iterator[tuple[Any, int, bytes]],
         for conn, t, data in messages:
             yield infos[conn.id], t, t, 0, data
             n += 1
-            if n % _PROGRESS_EVERY == 0:
+            if not n & 0xFF:  # now and then: progress for the caller
                 report.bytes_read = rec.size * min(n, total) // total
     except Exception as exc:  # damage past the index: keep what was read, say so
         rec._stop(rec.size * min(n, total) // total,
                   f"{describe_error(exc)} after {n} of {total} messages")
         return n - done
+    finally:
+        if close is not None:
+            close()
     if last:
         report.bytes_read = rec.size
         report.complete = True
