@@ -310,3 +310,17 @@ def test_unknown_formats_get_one_line_naming_them(tmp_path):
         open_recording(old)
     with pytest.raises(InputError, match="no metadata.yaml"):
         open_recording(tmp_path)
+
+
+def test_view_and_cmg_take_other_formats(tmp_path, rocas):
+    out = tmp_path / "bag.rrd"
+    res = rocas("view", BAG, "--rrd", out, "--no-viewer")
+    assert res.code == 0, res.stderr
+    assert "9 channels through Rerun's MCAP importer" in res.stdout and out.stat().st_size > 1e5
+    res = rocas("view", SERVICES_MCAP, "--rrd", tmp_path / "dir.rrd", "--no-viewer")
+    assert res.code == 0, res.stderr  # a rosbag2 directory is a recording, not a run directory
+    res = rocas("cmg", RECORD, "--format", "json")
+    assert res.code == 0, res.stderr
+    chans = {c["topic"]: c for c in json.loads(res.stdout)["channels"]}
+    assert chans["/apollo/planning"]["schema"] == "apollo.planning.ADCTrajectory"
+    assert chans["/apollo/localization/pose"]["messages"] == 15
