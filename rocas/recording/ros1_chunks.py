@@ -117,11 +117,13 @@ def _same(data: bytes) -> bytes:
     return data
 
 
-def walk_chunks(data: bytes | memoryview) -> Iterator[Connection | tuple[int, int, memoryview]]:
+def walk_chunks(data: bytes | memoryview, on_chunk: Callable[[int], None] | None = None,
+                ) -> Iterator[Connection | tuple[int, int, memoryview]]:
     """Connections and messages ``(connection id, log time [ns], payload)`` in file order.
 
     Args:
         data: the whole bag file (a memory map keeps memory flat: one chunk at a time).
+        on_chunk: called with the offset where each chunk ends [bytes] (progress).
 
     Raises:
         BagDamage: at the first record that is cut off or cannot be read (everything before it
@@ -147,29 +149,106 @@ def walk_chunks(data: bytes | memoryview) -> Iterator[Connection | tuple[int, in
                                         f"({type(exc).__name__})") from None
             # an uncompressed chunk cut off still holds the records before the cut
             yield from _chunk(inner, offset, cut)
+            if on_chunk is not None:
+                on_chunk(offset + len(body))
+        elif op == bytes([OP_INDEX_DATA]) or op == bytes([OP_CHUNK_INFO]):
+            continue
         elif op == bytes([OP_CONNECTION]) and not cut:
             yield _connection(header, body, offset)
 
 
 def _chunk(inner: bytes | memoryview, offset: int, cut: bool,
            ) -> Iterator[Connection | tuple[int, int, memoryview]]:
+    """The connections and messages of one chunk's records (the hot loop: one message record
+    at a time, parsed with ``struct`` and no per-field objects)."""
+    view = memoryview(inner)
+    n = len(view)
+    pos = 0
+    u32 = _U32.unpack_from
     try:
-        for _, header, body, _ in _records(inner, 0, partial=cut):
-            op = header.get("op", b"\xff")[:1]
-            if op == bytes([OP_MSG_DATA]):
-                (conn,) = _U32.unpack(header["conn"])
-                sec, nsec = _TIME.unpack(header["time"])
-                yield conn, sec * 1_000_000_000 + nsec, body
-            elif op == bytes([OP_CONNECTION]):
-                yield _connection(header, body, offset)
+        while pos < n:
+            if n - pos < 8:
+                raise BagDamage(pos, f"a record is cut off at byte {pos} of the chunk")
+            (hlen,) = u32(view, pos)
+            hend = pos + 4 + hlen
+            if hend + 4 > n:
+                raise BagDamage(pos, f"a record header at byte {pos} of the chunk claims "
+                                     f"{hlen} bytes")
+            conn = stamp = op = None
+            at = pos + 4
+            while at < hend:  # the header's fields: u32 length, name=value
+                (flen,) = u32(view, at)
+                f0 = at + 4
+                at = f0 + flen
+                if at > hend:
+                    raise BagDamage(pos, f"a header field at byte {f0 - 4} of the chunk claims "
+                                         f"{flen} bytes")
+                if flen == 4 and view[f0 : f0 + 3] == b"op=":
+                    op = view[f0 + 3]
+                elif flen == 9 and view[f0 : f0 + 5] == b"conn=":
+                    (conn,) = u32(view, f0 + 5)
+                elif flen == 13 and view[f0 : f0 + 5] == b"time=":
+                    sec, nsec = _TIME.unpack_from(view, f0 + 5)
+                    stamp = sec * 1_000_000_000 + nsec
+            (dlen,) = u32(view, hend)
+            start = hend + 4
+            end = start + dlen
+            if end > n:
+                raise BagDamage(pos, f"a record at byte {pos} of the chunk claims {dlen} bytes "
+                                     f"of data, {n - start} remain")
+            if op == OP_MSG_DATA:
+                if conn is None or stamp is None:
+                    raise BagDamage(pos, "a message record lacks its conn or time field")
+                yield conn, stamp, view[start:end]
+            elif op == OP_CONNECTION:
+                yield _connection(parse_header(view[pos + 4 : hend]), view[start:end], offset)
+            pos = end
     except BagDamage as exc:
         if cut:  # the chunk ends where the file does: the outer walk says so
             return
         raise BagDamage(offset, f"chunk at byte {offset} is damaged inside ({exc.reason})"
                         ) from None
-    except (KeyError, struct.error) as exc:
-        raise BagDamage(offset, f"chunk at byte {offset} is damaged inside (a message "
-                                f"record lacks {exc})") from None
+    except (ValueError, struct.error) as exc:
+        raise BagDamage(offset, f"chunk at byte {offset} is damaged inside ({exc})") from None
+
+
+def index_connections(data: bytes | memoryview) -> list[Connection]:
+    """The connection records of the bag's index section (where the bag header's
+    ``index_pos`` says), read without reading the chunks.
+
+    Raises:
+        BagDamage: the bag is not indexed (``index_pos`` 0: its recorder was stopped before it
+            wrote the index), or the index is cut off or unreadable.
+    """
+    view = memoryview(data)
+    if bytes(view[: len(MAGIC)]) != MAGIC:
+        raise BagDamage(0, "the file does not start with '#ROSBAG V2.0'")
+    records = _records(view[len(MAGIC):], len(MAGIC), partial=True)
+    offset, header, _, _ = next(records)
+    if header.get("op", b"")[:1] != bytes([OP_BAG_HEADER]):
+        raise BagDamage(offset, "the bag does not start with its bag header record")
+    try:
+        (index_pos,) = struct.unpack("<Q", header["index_pos"])
+        (conn_count,) = _U32.unpack(header["conn_count"])
+    except (KeyError, struct.error):
+        raise BagDamage(offset, "the bag header lacks index_pos or conn_count") from None
+    if index_pos == 0:
+        raise BagDamage(offset, "the bag is not indexed (its recorder did not finish it)")
+    if index_pos >= len(view):
+        raise BagDamage(offset, f"the index should start at byte {index_pos}, past the end of "
+                                f"the file ({len(view)} bytes): the file was cut short")
+    out: list[Connection] = []
+    for at, head, body, cut in _records(view[index_pos:], index_pos, partial=True):
+        if cut:
+            break
+        if head.get("op", b"")[:1] == bytes([OP_CONNECTION]):
+            out.append(_connection(head, body, at))
+        if len(out) == conn_count:
+            break
+    if len(out) != conn_count:
+        raise BagDamage(index_pos, f"the index lists {len(out)} of its {conn_count} "
+                                   "connections: it is cut off or damaged")
+    return out
 
 
 def _connection(header: dict[str, bytes], body: memoryview, offset: int) -> Connection:

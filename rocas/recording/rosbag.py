@@ -20,8 +20,10 @@ sequence number, so those are the log time and 0. Messages come in log-time orde
 
 from __future__ import annotations
 
+import mmap
 import os
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -40,11 +42,17 @@ def ros1_name(msgtype: str) -> str:
 
 
 class Ros1Recording(ForeignRecording):
-    """A ROS 1 bag (format 2.0), read through its index with ``rosbags.rosbag1``.
+    """A ROS 1 bag (format 2.0).
+
+    Its connections are read from the bag's index; its messages chunk by chunk in file order
+    (:mod:`rocas.recording.ros1_chunks`, over a memory map: one chunk at a time), which is
+    what the MCAP reader does too and twice as fast as ``rosbags.rosbag1``'s reader, which
+    merges the index entries of every connection in time order. Messages decode with
+    ``rosbags``' ROS 1 deserializer (:mod:`rocas.recording.decoding`).
 
     A bag whose index is missing (its recorder was stopped before writing it) or unreadable
-    (the file was cut short or damaged) is read chunk by chunk in file order instead
-    (:mod:`rocas.recording.ros1_chunks`), up to the first damage, with warnings that say so.
+    (the file was cut short or damaged) is read all the same, up to the first damage, with
+    warnings that say so; one with nothing readable is refused in one line.
     """
 
     format = "ros1"
@@ -53,92 +61,59 @@ class Ros1Recording(ForeignRecording):
     def __init__(self, path: str | os.PathLike[str], size: int,
                  decoders: DecoderCache | None = None) -> None:
         super().__init__(path, size, decoders)
-        #: why the index could not be used (the chunks are then read in file order), or None
+        from rocas.recording.ros1_chunks import BagDamage, index_connections
+
+        #: why the index could not be used (channels are then learnt from the chunks), or None
         self.index_problem: str | None = None
         try:
-            self._open().close()
-        except RecordingError:
-            self.index_problem = self._open_error
+            with _mapped(self.path) as mm:
+                for conn in index_connections(mm):
+                    self._declare(_chunk_channel(conn))
+        except BagDamage as exc:
+            self.index_problem = exc.reason
             self.scan()  # fail now, with one line, if the chunks hold nothing either
             if not self.channels:
-                raise
-
-    def _open(self) -> Any:
-        from rosbags.rosbag1 import Reader
-
-        reader = Reader(self.path)
-        try:
-            reader.open()
-        except Exception as exc:
-            self._open_error = describe_error(exc)
-            raise RecordingError(
-                f"{self.path} is a ROS 1 bag that cannot be read ({self._open_error})",
-                "if its recorder was stopped before it finished, index it with 'rosbag reindex' "
-                "(ROS 1) and try again",
-            ) from None
-        for conn in reader.connections:
-            self._declare(self._channel(conn))
-        return reader
+                raise RecordingError(
+                    f"{self.path} is a ROS 1 bag that cannot be read ({self.index_problem}, and "
+                    f"no complete chunk: {self.report.stop_reason or 'no chunk at all'})",
+                    "if its recorder was stopped before it finished, index it with "
+                    "'rosbag reindex' (ROS 1) and try again",
+                ) from None
 
     def _walk(self) -> Iterator[Walked]:
-        if self.index_problem is not None:
-            return self._walk_chunks()
-        reader = self._open()
-        infos = {conn.id: self.channels[conn.id] for conn in reader.connections}
-        total = max(1, sum(conn.msgcount for conn in reader.connections))
-        return _timed(self, reader.messages(), infos, total, close=reader.close)
-
-    def _walk_chunks(self) -> Iterator[Walked]:
-        import mmap
-
         from rocas.recording.ros1_chunks import BagDamage, Connection, walk_chunks
 
         report = self.report
-        report.summary_problem = (
-            f"the bag's index cannot be used ({self.index_problem}); its chunks were read in "
-            "file order instead")
-        infos: dict[int, ChannelInfo] = {}
-        with open(self.path, "rb") as f:
-            mm = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
-        walk = walk_chunks(mm)
-        try:
-            for item in walk:
-                if isinstance(item, Connection):
-                    infos[item.id] = self._declare(_chunk_channel(item))
-                    continue
-                cid, t, data = item
-                ch = infos.get(cid)
-                if ch is None:
-                    report.unknown_channel_messages += 1
-                    continue
-                yield ch, t, t, 0, bytes(data)
-        except BagDamage as exc:
-            self._stop(exc.offset, exc.reason)
-            return
-        finally:
-            walk.close()
-            del walk
+        if self.index_problem is not None:
+            report.summary_problem = (
+                f"the bag's index cannot be used ({self.index_problem}); its chunks were read "
+                "in file order up to the damage")
+        infos = {ch.id: ch for ch in self.channels.values()}
+
+        def progress(offset: int) -> None:
+            report.bytes_read = offset
+
+        with _mapped(self.path) as mm:
+            walk = walk_chunks(mm, progress)
             try:
-                mm.close()
-            except BufferError:  # a view still held: the map closes when it is collected
-                pass
+                for item in walk:
+                    if type(item) is tuple:
+                        cid, t, data = item
+                        ch = infos.get(cid)
+                        if ch is None:
+                            report.unknown_channel_messages += 1
+                            continue
+                        yield ch, t, t, 0, bytes(data)
+                    elif isinstance(item, Connection):
+                        infos[item.id] = self._declare(_chunk_channel(item))
+            except BagDamage as exc:
+                self._stop(exc.offset, exc.reason)
+                return
+            finally:
+                walk.close()
+                del walk
         report.bytes_read = self.size
         report.complete = True
-
-    def _channel(self, conn: Any) -> ChannelInfo:
-        meta: dict[str, str] = {}
-        ext = conn.ext
-        if getattr(ext, "callerid", None):
-            meta[ROS1_CALLERID_KEY] = str(ext.callerid)
-        if getattr(ext, "latching", None) is not None:
-            meta["latching"] = str(int(ext.latching))
-        name = ros1_name(conn.msgtype)
-        return ChannelInfo(
-            id=conn.id, topic=conn.topic, message_encoding="ros1", schema_name=name,
-            schema_encoding="ros1msg", schema_data=conn.msgdef.data.encode(),
-            metadata=meta, schema_id=0,
-        )
-
 
 
 def _chunk_channel(conn: Any) -> ChannelInfo:
@@ -154,6 +129,20 @@ def _chunk_channel(conn: Any) -> ChannelInfo:
         schema_name=ros1_name(fields.get("type", b"").decode()), schema_encoding="ros1msg",
         schema_data=fields.get("message_definition", b""), metadata=meta, schema_id=0,
     )
+
+
+@contextmanager
+def _mapped(path: Path) -> Iterator[mmap.mmap]:
+    """The file as a read-only memory map (closed when no view of it is left)."""
+    with open(path, "rb") as f:
+        mm = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
+    try:
+        yield mm
+    finally:
+        try:
+            mm.close()
+        except BufferError:  # a view still held: the map closes when it is collected
+            pass
 
 
 class Rosbag2Recording(ForeignRecording):

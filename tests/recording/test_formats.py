@@ -59,6 +59,25 @@ def test_a_ros1_bag_is_read_with_its_writers_and_decoded_fields():
     assert rec.topics()["/turtle1/pose"].schema_name == "turtlesim/Pose"
 
 
+def test_the_bag_reader_yields_what_rosbags_reads():
+    """rocas walks a bag's chunks in file order; rosbags merges its index in time order: the
+    same messages, channels and message definitions either way."""
+    from collections import Counter
+
+    from rosbags.rosbag1 import Reader
+
+    ours = open_recording(BAG)
+    mine = Counter((m.channel.topic, m.log_time_ns, m.data) for m in ours.messages())
+    with Reader(BAG) as r:
+        theirs = Counter((c.topic, t, bytes(raw)) for c, t, raw in r.messages())
+        conns = {c.id: c for c in r.connections}
+    assert mine == theirs and sum(mine.values()) == 8647
+    for cid, ch in ours.channels.items():
+        assert ch.topic == conns[cid].topic
+        assert ch.schema_data.decode() == conns[cid].msgdef.data
+        assert ch.metadata["callerid"] == conns[cid].ext.callerid
+
+
 def test_a_rosbag2_db3_file_is_read_and_a_bad_stored_definition_is_reported():
     rec = open_recording(TALKER)
     assert rec.format == "rosbag2"
