@@ -151,7 +151,40 @@ def _typestore(name: str, encoding: str, data: bytes) -> tuple[Any, str] | str:
         return f"schema {name} cannot be loaded: {type(exc).__name__}: {exc}"
     if typename not in store.fielddefs:
         return f"schema {name} does not define {name}"
+    missing = _undefined(store, typename)
+    if missing:
+        return f"schema {name} uses {missing}, which it does not define"
     return store, typename
+
+
+def _undefined(store: Any, typename: str) -> str | None:
+    """The first type ``typename`` uses (directly or through its fields) that ``store`` lacks."""
+    seen: set[str] = set()
+    todo = [typename]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        if name not in store.fielddefs:
+            return name
+        todo.extend(_names(store.fielddefs[name][1]))
+    return None
+
+
+def _names(tree: Any) -> list[str]:
+    """Type names a rosbags field list refers to (nested message types)."""
+    from rosbags.typesys.base import Nodetype
+
+    out: list[str] = []
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, tuple) and len(node) == 2 and node[0] == Nodetype.NAME:
+            out.append(node[1])
+        elif isinstance(node, (tuple, list)):
+            stack.extend(node)
+    return out
 
 
 #: The dependencies' separator in a concatenated message definition (ROS 1 and ROS 2 alike).

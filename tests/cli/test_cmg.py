@@ -39,7 +39,7 @@ def ros1(tmp_path):
     with open(path, "wb") as f:
         w = McapWriter(f)
         w.start(profile="ros1", library="bag2mcap")
-        s = w.register_schema("geometry_msgs/Twist", "ros1msg", b"Vector3 linear")
+        s = w.register_schema("geometry_msgs/Twist", "ros1msg", b"float64 x")
         cmd = w.register_channel("/cmd_vel", "ros1", s, {"callerid": "/move_base"})
         odom = w.register_channel("/odom", "ros1", s,
                                   {"callerid": "/base", "rocas.readers": "move_base"})
