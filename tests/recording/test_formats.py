@@ -343,3 +343,24 @@ def test_view_and_cmg_take_other_formats(tmp_path, rocas):
     chans = {c["topic"]: c for c in json.loads(res.stdout)["channels"]}
     assert chans["/apollo/planning"]["schema"] == "apollo.planning.ADCTrajectory"
     assert chans["/apollo/localization/pose"]["messages"] == 15
+
+
+def test_the_cli_diffs_a_mixed_pair_and_annotates_a_bag(tmp_path, rocas):
+    cmg = tmp_path / "cmg.json"
+    cmg.write_text(json.dumps({"modules": {
+        "turtlesim": {"reads": ["/turtle1/cmd_vel"], "writes": ["/turtle1/pose"]},
+        "teleop": {"reads": ["/turtle1/pose"], "writes": ["/turtle1/cmd_vel"]},
+    }, "control_channel": "/turtle1/cmd_vel"}))
+    out = tmp_path / "annotated.mcap"
+    res = rocas("annotate", BAG, "--cmg", cmg, "-o", out)
+    assert res.code == 0, res.stderr
+    assert "8647 messages" in res.stdout and "profile ros1" in res.stdout
+    infos, _ = read_channels(out)
+    pose = [c for c in infos if c.topic == "/turtle1/pose"]
+    assert pose and all(c.metadata["rocas.writers"] == "turtlesim" for c in pose)
+    assert all(c.metadata["callerid"] == "/sim" for c in pose)  # kept as it was
+    res = rocas("diff", out, BAG, "--json")  # the annotated copy against the bag itself
+    assert res.code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["deviating_module"] is None and doc["control_channel"] == "/turtle1/cmd_vel"
+    assert all(c["mdr_before"] == 0.0 for c in doc["channels"])
