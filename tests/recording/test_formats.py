@@ -364,3 +364,29 @@ def test_the_cli_diffs_a_mixed_pair_and_annotates_a_bag(tmp_path, rocas):
     doc = json.loads(res.stdout)
     assert doc["deviating_module"] is None and doc["control_channel"] == "/turtle1/cmd_vel"
     assert all(c["mdr_before"] == 0.0 for c in doc["channels"])
+
+
+@pytest.mark.parametrize("source", [BAG, RECORD, TALKER], ids=["bag", "record", "db3"])
+def test_damaged_copies_give_warnings_or_one_line_never_a_traceback(tmp_path, rocas, source):
+    import random
+
+    rng = random.Random(7)
+    data = source.read_bytes()
+    topics = sorted({c.topic for c in open_recording(source).scan().channels.values()})
+    cmg = _cmg(tmp_path / "cmg.json", topics[0], topics)
+    for k in range(9):
+        d = bytearray(data)
+        if k % 3 == 0:  # flipped bytes
+            for _ in range(30):
+                d[rng.randrange(len(d))] = rng.randrange(256)
+        elif k % 3 == 1:  # cut short
+            d = d[: rng.randrange(len(d))]
+        else:  # a zeroed stretch
+            at, n = rng.randrange(len(d)), rng.randrange(1, 5000)
+            d[at : at + n] = bytes(len(d[at : at + n]))
+        bad = tmp_path / f"bad{source.suffix}"
+        bad.write_bytes(bytes(d))
+        res = rocas("diff", bad, source, "--cmg", cmg, "--json")
+        assert res.code in (0, 3) and "Traceback" not in res.stderr, (k, res.stderr)
+        if res.code == 3:
+            assert len([ln for ln in res.stderr.splitlines() if ln.startswith("rocas: error:")]) == 1
