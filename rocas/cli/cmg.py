@@ -161,7 +161,7 @@ def _notes(topology: Mapping[str, ChannelTopology],
         if odd:
             notes.append(
                 f"{topic} is {'/'.join(odd) or 'unencoded'}: rocas decodes only protobuf, "
-                "json and ROS 2 cdr, so 'rocas diff' skips its messages; it stays in the graph"
+                "json, ROS 2 cdr and ROS 1, so 'rocas diff' skips its messages; it stays in the graph"
             )
     return notes
 

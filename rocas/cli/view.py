@@ -28,7 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "source",
         metavar="RUN_DIR|RECORDING.mcap",
-        help="a directory written by 'rocas analyze', or one MCAP recording",
+        help="a directory written by 'rocas analyze', or one recording (MCAP, ROS 1 bag, "
+             "rosbag2, Cyber RT record)",
     )
     p.add_argument("--rrd", metavar="OUT.rrd", help="write the Rerun recording to this file")
     p.add_argument("--web", action="store_true", help="serve the web viewer instead of the native one")
@@ -56,7 +57,7 @@ def write_rrd(source: Path, out: Path) -> tuple[str, list[str]]:
     """
     from rocas.viz.analysis import write_recording_rrd, write_run_dir_rrd
 
-    if source.is_dir():
+    if source.is_dir() and not (source / "metadata.yaml").is_file():  # not a rosbag2 directory
         contents = write_run_dir_rrd(out, source)
         shown = [n for n in ("accident", "reference", "fixed") if n in contents]
         parts = [f"executions: {', '.join(shown)}"]

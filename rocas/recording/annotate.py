@@ -1,5 +1,8 @@
 """Add the topology contract to an existing recording, copying everything else as it is.
 
+A recording in another format (ROS 1 bag, rosbag2, Cyber RT record) is written out as MCAP
+with the same channels and messages (:mod:`rocas.recording.convert`).
+
 ``annotate_recording`` streams an MCAP file record by record (constant memory: one chunk at
 a time) into a new file in which the channels you name carry ``rocas.writers`` /
 ``rocas.readers`` (and one channel ``rocas.role = control``). Everything else is copied:
@@ -153,6 +156,12 @@ def read_channels(
         InputError: the file is missing or not an MCAP file.
     """
     rec = open_recording(path)
+    if rec.format != "mcap":  # other formats: one pass (they have no MCAP summary)
+        rec.scan()
+        if warnings is not None:
+            warnings.extend(rec.report.warnings(str(path)))
+        counts = {t: st.messages for t, st in rec.report.channel_stats.items()}
+        return list(rec.channels.values()), counts
     try:
         with open(rec.path, "rb") as f:
             summary = make_reader(f).get_summary()
@@ -364,7 +373,11 @@ def annotate_recording(
         TopologyError: ``control_channel`` is not a channel of the recording.
     """
     src, dst = Path(source), Path(output)
-    rec = open_recording(src)  # the uniform checks: exists, is a file, is MCAP
+    rec = open_recording(src)  # the uniform checks: exists, is a file, is a recording
+    if rec.format != "mcap":  # a ROS bag or Cyber record: written out as MCAP
+        from rocas.recording.convert import write_mcap
+
+        return write_mcap(rec, dst, annotations, control_channel)  # type: ignore[arg-type]
     refuse_overwriting(src, dst)
     chunk_size = _chunk_size(src)
     with atomic_path(dst) as tmp, open(tmp, "wb") as out, open(rec.path, "rb") as f:

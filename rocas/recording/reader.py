@@ -65,7 +65,7 @@ _SPEC_OPCODES = frozenset(range(0x01, 0x10))
 # every offset is tried: a false candidate that overlaps a real header must not hide it.
 _CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Encodings rocas decodes; any other channel is skipped with a warning.
-DECODABLE_ENCODINGS = ("protobuf", "json", "cdr")
+DECODABLE_ENCODINGS = ("protobuf", "json", "cdr", "ros1")
 
 
 @dataclass(frozen=True)
@@ -197,7 +197,8 @@ class ReadReport:
             if st.skipped_encoding and skipped_encodings:
                 out.append(
                     f"{name}: skipped channel {topic}: {st.skipped_encoding} messages in an "
-                    "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
+                    "encoding rocas cannot decode (only protobuf, json, ROS 2 cdr and ROS 1 are "
+                    "compared)"
                 )
             if st.undecodable:
                 out.append(
@@ -236,6 +237,10 @@ class Recording:
     file. Channels, attachments and metadata are collected during a pass; :meth:`scan`
     runs a pass that collects them without decoding messages.
     """
+
+    #: the recording's format (readers of other formats set theirs: ``ros1``, ``rosbag2``,
+    #: ``cyber``); ``profile`` is the MCAP header's profile for those
+    format = "mcap"
 
     def __init__(
         self, path: str | os.PathLike[str], decoders: DecoderCache | None = None
@@ -967,9 +972,30 @@ def describe_error(exc: BaseException) -> str:
 def open_recording(
     path: str | os.PathLike[str], decoders: DecoderCache | None = None
 ) -> Recording:
-    """Open an MCAP file for streaming; raises :class:`InputError` if it is not one.
+    """Open a recording for streaming, whatever its format; raises :class:`InputError` if it
+    is none rocas reads.
 
-    Pass one :class:`DecoderCache` to several recordings to decode identical schemas
-    into identical classes.
+    The format is recognised from the file's first bytes (:func:`rocas.recording.formats.sniff`):
+    MCAP is read by :class:`Recording`; ROS 1 bags and rosbag2 recordings by
+    :mod:`rocas.recording.rosbag`, Cyber RT records by :mod:`rocas.recording.cyber`, each
+    with :class:`Recording`'s interface (``format`` tells them apart). Pass one
+    :class:`DecoderCache` to several recordings to decode identical schemas into identical
+    classes.
     """
+    from rocas.recording.formats import sniff
+
+    p = Path(path)
+    kind, size = sniff(p)
+    if kind == "ros1":
+        from rocas.recording.rosbag import Ros1Recording
+
+        return Ros1Recording(p, size, decoders)  # type: ignore[return-value]
+    if kind == "rosbag2":
+        from rocas.recording.rosbag import Rosbag2Recording
+
+        return Rosbag2Recording(p, size, decoders)  # type: ignore[return-value]
+    if kind == "cyber":
+        from rocas.recording.cyber import CyberRecording
+
+        return CyberRecording(p, size, decoders)  # type: ignore[return-value]
     return Recording(path, decoders)

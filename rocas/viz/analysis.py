@@ -312,10 +312,21 @@ def write_recording_rrd(
     topics = tuple(sorted(t for t, st in scan.report.channel_stats.items() if st.messages))
     if not topics and ex.world is None:
         raise InputError(f"{recording}: nothing to show (no readable message and no world)")
-    with rrd_recording(path, recording_blueprint(name, ex, topics), kind="view") as rec:
-        log_execution(rec, name, ex, channels=False)
-        if topics:
-            rec.log_file_from_path(Path(recording))
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="rocas-view-") as tmp:
+        source = Path(recording)
+        if topics and scan.format != "mcap":
+            # Rerun imports MCAP: a ROS bag or Cyber record goes in as an MCAP copy, kept
+            # until the .rrd is written
+            from rocas.recording.convert import write_mcap
+
+            source = Path(tmp) / "recording.mcap"
+            write_mcap(scan, source)  # type: ignore[arg-type]
+        with rrd_recording(path, recording_blueprint(name, ex, topics), kind="view") as rec:
+            log_execution(rec, name, ex, channels=False)
+            if topics:
+                rec.log_file_from_path(source)
     return ex, topics
 
 

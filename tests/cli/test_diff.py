@@ -114,7 +114,7 @@ def test_non_protobuf_channels_are_skipped_with_a_warning(rocas, tmp_path):
             cid = register_protobuf_channel(w, "/control", control_pb2.ControlCommand,
                                             writers=["control"], readers=["car"], role="control")
             sid = w.register_schema("std_msgs/String", "ros1msg", b"string data")
-            rid = w.register_channel("/ros_topic", "ros1", sid, {"rocas.writers": "car"})
+            rid = w.register_channel("/ros_topic", "msgpack", sid, {"rocas.writers": "car"})
             for i in range(100):
                 t = i * 10**8
                 m = control_pb2.ControlCommand(throttle=throttle if i > 60 else 0)
@@ -130,7 +130,7 @@ def test_non_protobuf_channels_are_skipped_with_a_warning(rocas, tmp_path):
     skipped = [ln for ln in res.stderr.splitlines() if "skipped channel" in ln]
     assert skipped == [
         f"rocas: warning: {tmp_path / name}: skipped channel /ros_topic: 100 messages in an "
-        "encoding rocas cannot decode (only protobuf, json and ROS 2 cdr are compared)"
+        "encoding rocas cannot decode (only protobuf, json, ROS 2 cdr and ROS 1 are compared)"
         for name in ("a.mcap", "b.mcap")
     ]
     assert json.loads(res.stdout)["deviating_module"] == "control"

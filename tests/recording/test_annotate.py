@@ -228,8 +228,13 @@ def test_repair_and_convert_hints_name_tools_that_are_installed(tmp_path):
     done = subprocess.run([rerun, "mcap", "check", "--help"], capture_output=True, timeout=60,
                           check=False)
     assert done.returncode == 0
-    not_mcap = tmp_path / "bag.db3"
-    not_mcap.write_bytes(b"SQLite format 3\x00")
+    not_mcap = tmp_path / "log.dat"  # no format rocas reads (bags and .db3 are read directly)
+    not_mcap.write_bytes(b"some other logger's format\x00")
     with pytest.raises(RecordingError) as info:
         open_recording(not_mcap)
     assert "rosbags-convert" in info.value.hint and shutil.which("rosbags-convert") is not None
+    broken_db3 = tmp_path / "bag.db3"
+    broken_db3.write_bytes(b"SQLite format 3\x00")
+    with pytest.raises(RecordingError, match="rosbag2 .db3 file that cannot be read") as info:
+        open_recording(broken_db3)
+    assert "ros2 bag reindex" in info.value.hint

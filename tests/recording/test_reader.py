@@ -100,7 +100,7 @@ def test_foreign_encodings_are_counted_not_fatal(tmp_path):
         js = w.register_schema("s", "jsonschema", b"{}")
         ros = w.register_schema("std_msgs/String", "ros1msg", b"string data")
         cj = w.register_channel("/json", "json", js)
-        cr = w.register_channel("/ros", "ros1", ros)
+        cr = w.register_channel("/ros", "msgpack", ros)  # ros1 is decoded: see test_formats
         cb = w.register_channel("/broken", "protobuf", 0)
         for i in range(5):
             w.add_message(cj, log_time=i, publish_time=i, data=json.dumps({"i": i}).encode())
