@@ -43,9 +43,13 @@ from rocas.analysis.noise import (
     noisy_start,
     with_ignored,
 )
-from rocas.errors import UsageError
+from rocas.errors import RecordingError, UsageError
 from rocas.recording.reader import Recording
 
+#: Longest stretch of log time one recording may span [s]. A longer one is a clock that
+#: wrapped past 2**64 ns or a corrupted timestamp, never a drive: it is refused, since its
+#: bins (and the reorder window it would need) say nothing about the run.
+MAX_SPAN_S = 30 * 86400.0
 #: Log time read from the start of each file to align them and learn their noise [s].
 HEAD_S = 8.0
 #: Payloads kept per topic and side from the head, to learn the noise from.
@@ -136,6 +140,14 @@ def _read_head(rec: Recording) -> _Head:
             if t > first_read + limit:
                 break
             earliest = t if earliest is None else min(earliest, t)
+            if abs(t - first_read) > MAX_SPAN_S * 1e9:
+                lo, hi = min(t, first_read), max(t, first_read)
+                raise RecordingError(
+                    f"{rec.path}: log times span {(hi - lo) / 86400e9:.4g} days ({lo} to {hi} "
+                    "ns): a clock that wrapped past 2^64 ns or a corrupted timestamp, not one "
+                    "drive",
+                    "check the recording's timestamps with 'mcap info'; rocas compares runs of "
+                    f"at most {MAX_SPAN_S / 86400:g} days")
             th = topics.get(ch.topic)
             if th is None:
                 th = topics[ch.topic] = _TopicHead(t)
@@ -282,7 +294,8 @@ FLUSHED_FRACTION = 0.5
 
 
 def _times(th: _TopicHead) -> np.ndarray:
-    return np.sort(np.array([t for t, _, _ in th.kept], dtype=np.int64))
+    """The topic's kept log times, sorted [ns since its first]."""
+    return np.sort(np.array([t - th.first_ns for t, _, _ in th.kept], dtype=np.int64))
 
 
 def flushed_channels(head_a: _Head, head_b: _Head) -> tuple[tuple[int, str, float, float], ...]:
@@ -315,9 +328,10 @@ MATCH_RANGE_S = 3.0
 MATCH_GAIN = 0.5
 
 
-def _signals(th: _TopicHead) -> tuple[np.ndarray, np.ndarray] | None:
-    """A topic's head as (log times [ns], (n, k) float content): every float leaf of each
-    message that decodes, for the messages with the most common number of them (k >= 1)."""
+def _signals(th: _TopicHead, base: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """A topic's head as (log times [ns since ``base``], (n, k) float content): every float
+    leaf of each message that decodes, for the messages with the most common number of them
+    (k >= 1)."""
     rows: list[tuple[int, np.ndarray]] = []
     for t, payload, decode in th.kept:
         try:
@@ -327,7 +341,7 @@ def _signals(th: _TopicHead) -> tuple[np.ndarray, np.ndarray] | None:
         parts = [np.ravel(np.asarray(v, dtype=np.float64))
                  for _, is_float, v, _ in leaf_pairs(message, message, "", False) if is_float]
         if parts:
-            rows.append((t, np.concatenate(parts)))
+            rows.append((t - base, np.concatenate(parts)))
     if len(rows) < 10:
         return None
     sizes: dict[int, int] = {}
@@ -367,18 +381,22 @@ def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin
     which the two heads' float content matches best, summed over the topics that move; None
     when it is not clearly better (:data:`MATCH_GAIN`) than ``start`` itself."""
     pairs = []
+    base_a, base_b = head_a.earliest_ns or 0, head_b.earliest_ns or 0
     for t in topics:
-        a, b = _signals(head_a.topics[t]), _signals(head_b.topics[t])
+        a = _signals(head_a.topics[t], base_a)
+        b = _signals(head_b.topics[t], base_b)
         if a is not None and b is not None and a[1].shape[1] == b[1].shape[1]:
             pairs.append((a, b))
     if not pairs:
         return None
+    shift = base_a - base_b  # an offset of the absolute times, in the relative ones
     reach = bin_s * 1e9 / 2
     step = round(bin_s * 1e9 / 2)
     n = round(MATCH_RANGE_S * 1e9 / step)
 
     def cost(offset: int) -> float | None:
-        parts = [c for a, b in pairs if (c := _match_cost(a, b, offset, reach)) is not None]
+        parts = [c for a, b in pairs
+                 if (c := _match_cost(a, b, offset - shift, reach)) is not None]
         return sum(parts) / len(parts) if len(parts) * 2 >= len(pairs) else None
 
     base = cost(start)

@@ -43,7 +43,7 @@ import numpy as np
 from google.protobuf import descriptor_pb2
 from google.protobuf.message import DecodeError
 
-from rocas.analysis.align import Alignment, align
+from rocas.analysis.align import MAX_SPAN_S, Alignment, align
 from rocas.analysis.mdr import EXACT, Tolerance, mdr, repeated_lengths
 from rocas.analysis.noise import FieldRules, masked_mdr
 from rocas.errors import RecordingError
@@ -53,10 +53,6 @@ ACCIDENT, REFERENCE = 0, 1
 #: A message whose payload equals the one before it on its channel, logged within this of it,
 #: was logged twice [s].
 REPEAT_S = 0.002
-#: Longest stretch of log time one recording may span [s]. A longer one is a clock that
-#: wrapped past 2**64 ns or a corrupted timestamp, never a drive: it is refused, since its
-#: bins (and the reorder window it would need) say nothing about the run.
-MAX_SPAN_S = 30 * 86400.0
 
 
 @dataclass(frozen=True)
@@ -264,8 +260,8 @@ class _Acc:
         self.finish_pending()
         self.pending = _Pending(index, scores, leftover, counts, entered)
 
-    def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
-               ) -> tuple[list[int], list[float], list[tuple[int, int]], list[bool],
+    def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float,
+               origin: int) -> tuple[list[int], list[float], list[tuple[int, int]], list[bool],
                           tuple[int, int], tuple[int, int]]:
         """The channel's series once both files are read: each unpaired message scores 1
         where the other run was silent on the channel around it (:func:`_silent`), and is set
@@ -274,8 +270,10 @@ class _Acc:
         (``end_ns``).
 
         Args:
-            times: (accident, reference) sorted aligned log times of the channel [ns].
-            end_ns: end of the compared span on the accident's clock [ns].
+            times: (accident, reference) sorted aligned log times of the channel [ns since
+                ``origin``].
+            end_ns: end of the compared span [ns since ``origin``].
+            origin: t = 0 on the accident's clock [ns].
 
         Returns:
             (bins, values, counts, entered, set aside per side, outside the span per side).
@@ -285,7 +283,8 @@ class _Acc:
         for b, total, n, loose, c, e in zip(self.bins, self.sums, self.paired, self.unpaired,
                                             self.counts, self.entered, strict=True):
             scored = 0
-            for t, side in loose:
+            for t_abs, side in loose:
+                t = t_abs - origin
                 if t > end_ns + bin_ns / 2:
                     outside[side] += 1
                 elif _silent(times[1 - side], times[side], t):
@@ -622,7 +621,7 @@ def _one_pass(
             tl = times[side].get(topic)
             if tl is None:
                 tl = times[side][topic] = []
-            tl.append(t_al)
+            tl.append(t_al - origin)
             bin_slots = open_bins.get(b)
             if bin_slots is None:
                 bin_slots = open_bins[b] = {}
@@ -659,7 +658,8 @@ def _one_pass(
         a = acc.get(topic, _Acc())
         ts = (np.asarray(sorted(times[0].get(topic, ())), dtype=np.int64),
               np.asarray(sorted(times[1].get(topic, ())), dtype=np.int64))
-        bins, values, counts, entered, aside, outside = a.finish(ts, end_ns, bin_ns)
+        bins, values, counts, entered, aside, outside = a.finish(ts, end_ns - origin, bin_ns,
+                                                                 origin)
         outside = (outside[0] + before[0].get(topic, 0), outside[1] + before[1].get(topic, 0))
         series[topic] = ChannelSeries(
             topic=topic,
@@ -673,7 +673,7 @@ def _one_pass(
             aside=aside,
             repeated=(repeated[0].get(topic, 0), repeated[1].get(topic, 0)),
             outside=outside,
-            stops_s=_stops(ts, end_ns, origin, bin_ns),
+            stops_s=_stops(ts, end_ns - origin, bin_ns),
         )
         if account != ChannelAccount():
             accounts[topic] = account
@@ -693,7 +693,7 @@ def _one_pass(
     )
 
 
-def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, origin: int, bin_ns: float
+def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
            ) -> tuple[float | None, float | None]:
     """Per side, the channel's last message when the channel falls silent there for good while
     the other run goes on publishing it for more than :data:`SILENT_WINDOW_S` of the compared
@@ -705,7 +705,7 @@ def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, origin: int, bin
             continue
         end_other = min(float(other[-1]), end_ns)
         if end_other - float(mine[-1]) > max(SILENT_WINDOW_S * 1e9, bin_ns):
-            out[side] = (float(mine[-1]) - origin) / 1e9
+            out[side] = float(mine[-1]) / 1e9
     return out[0], out[1]
 
 
