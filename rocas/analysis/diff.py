@@ -107,6 +107,8 @@ class DiffResult:
         rules: topic -> how its messages were compared (fields set aside, learned float
             tolerances), for the channels that have any.
         noisy_start: the two runs differ at their start (learning was on).
+        first_differing_s: topic -> log time of the first differing message in the bin of its
+            t* [s] (orders modules whose change points share a bin).
     """
 
     accident: str
@@ -125,6 +127,7 @@ class DiffResult:
     accounts: dict[str, ChannelAccount] = field(default_factory=dict)
     rules: dict[str, FieldRules] = field(default_factory=dict)
     noisy_start: bool = False
+    first_differing_s: dict[str, float] = field(default_factory=dict)
 
     @property
     def ignored_fields(self) -> dict[str, tuple[str, ...]]:
@@ -164,7 +167,7 @@ class DiffResult:
         quiet = {c for m in modules for c in self.cmg.channels_written_by(m)} - {self.control_channel}
         return find_initial_module(self.cmg, self._t_star(quiet, past_entries), self.control_channel,
                                    self.delta_s, control_onset_s=self.control_onset_s,
-                                   bin_s=self.bin_s)
+                                   bin_s=self.bin_s, first_differing_s=self.first_differing_s)
 
     def walk_past_window(self, written_by: Collection[str], reach_s: float | None = None
                          ) -> PinpointResult:
@@ -475,11 +478,14 @@ def diff(
     ctrl_series = res.series.get(ctrl)
     differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
     onset = float(ctrl_series.times_s[differing[0]]) if len(differing) else None
-    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s)
+    within = _first_differing(res.series, t_star)
+    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s,
+                              first_differing_s=within)
     pin_entries = None
     if entries:
         pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset,
-                                          bin_s=bin_s)
+                                          bin_s=bin_s,
+                                          first_differing_s=_first_differing(res.series, t_after))
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note
@@ -513,7 +519,23 @@ def diff(
         accounts=res.accounts,
         rules=rules,
         noisy_start=noisy,
+        first_differing_s=within,
     )
+
+
+def _first_differing(series: dict[str, ChannelSeries], t_star: dict[str, float | None]
+                     ) -> dict[str, float]:
+    """topic -> the log time of the first differing message in the bin of its t* [s]."""
+    out = {}
+    for topic, t in t_star.items():
+        s = series.get(topic)
+        if t is None or s is None or s.first_differing_s is None or not len(s.times_s):
+            continue
+        k = int(np.searchsorted(s.times_s, t - 1e-9))
+        if k < len(s.times_s) and abs(s.times_s[k] - t) < 1e-9 \
+                and np.isfinite(s.first_differing_s[k]):
+            out[topic] = float(s.first_differing_s[k])
+    return out
 
 
 def _span_warnings(res: Any, alignment: Alignment, accident: str, reference: str

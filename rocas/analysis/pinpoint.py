@@ -90,14 +90,20 @@ def _why_not(
     t_star: Mapping[Node, float | None],
     depth: Mapping[Node, int],
     control_channel: str,
+    within: tuple[float, float] | None = None,
 ) -> str:
-    """Why a reachable module with a change point is not the answer (see the tie rule)."""
+    """Why a reachable module with a change point is not the answer (see the tie rule).
+    ``within``: (the module's, the answer's) first differing message in their common bin."""
     if deviating is None:
         return "reachable"
     t_dev = t_star[(MODULE, deviating)]
     if t_dev is None or t_module > t_dev:
         return (f"reachable, but its change point ({_fmt(t_module)}) is later than "
                 f"{deviating}'s ({_fmt(t_dev)})")
+    if within is not None and within[0] > within[1]:
+        return (f"reachable, with its change point in the same bin as {deviating}'s "
+                f"({_fmt(t_module)}), but its first differing message ({within[0]:.3f} s) came "
+                f"after {deviating}'s ({within[1]:.3f} s)")
     # same change point (the same bin): the tie goes to the module farther upstream
     if depth.get((MODULE, module), 0) < depth.get((MODULE, deviating), 0):
         return (f"reachable, with the same change point as {deviating} ({_fmt(t_module)}), "
@@ -115,6 +121,7 @@ def find_initial_module(
     control_onset_s: float | None = None,
     bin_s: float | None = None,
     past_window: bool = True,
+    first_differing_s: Mapping[str, float] | None = None,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -132,6 +139,10 @@ def find_initial_module(
         past_window: when the walk names the control channel's own writer, go on from an input
             of it that departed before the window (see :func:`_past_the_window`); False: the
             paper's walk as written.
+        first_differing_s: topic -> log time of the first message that differs in the bin of
+            its t* [s]: modules whose change points fall into one bin are ordered by it before
+            the tie rule (jitter moves a message across a bin edge; the message's own time
+            still says which came first). None: bins only.
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -196,16 +207,23 @@ def find_initial_module(
     # nothing else in the graph explains it, and it is named (the plant's own output changed)
     feedback = {n for k, n in succ.get(start, ()) if k == MODULE} if fallback else set()
 
+    def within_bin(m: str, tm: float) -> float:
+        """The module's first differing message at its t* (its t* without that detail)."""
+        if not first_differing_s:
+            return tm
+        return min((first_differing_s.get(v[1], tm) for v in succ[(MODULE, m)]
+                    if t_star.get(v) == tm), default=tm)
+
     def candidates_without(left_out: set[str]) -> tuple[frozenset[str], list]:
         reach = frozenset(n for k, n in depth if k == MODULE and n not in left_out)
-        return reach, [(tm, -depth.get((MODULE, m), 0), m) for m in reach
+        return reach, [(tm, within_bin(m, tm), -depth.get((MODULE, m), 0), m) for m in reach
                        if (tm := t_star[(MODULE, m)]) is not None and explains(tm)]
 
     reachable, candidates = candidates_without(feedback)
     if not candidates and feedback and control_onset_s is None:
         feedback = set()
         reachable, candidates = candidates_without(feedback)
-    deviating = min(candidates)[2] if candidates else None
+    deviating = min(candidates)[3] if candidates else None
 
     path: tuple[str, ...] = ()
     if deviating is not None:
@@ -222,7 +240,11 @@ def find_initial_module(
                              f"[{control_onset_s - delta_s:g}, {control_onset_s:g}] s, the window "
                              f"before {control_channel} first differs")
         elif m in reachable:
-            exclusions[m] = _why_not(m, tm, deviating, t_star, depth, control_channel)
+            t_dev = t_star[(MODULE, deviating)] if deviating else None
+            exclusions[m] = _why_not(
+                m, tm, deviating, t_star, depth, control_channel,
+                (within_bin(m, tm), within_bin(deviating, tm))
+                if deviating is not None and t_dev == tm else None)
         elif m in feedback:
             exclusions[m] = (f"reads {control_channel}, which has no change point to start the "
                              "walk from, so its change may be the vehicle's response to the "

@@ -65,6 +65,9 @@ class ChannelSeries:
         mdr: (n,) MDR of each such bin, in [0, 1].
         messages: (n, 2) message counts per bin in (accident, reference).
         only_in: "accident" or "reference" when the channel exists in one recording only.
+        first_differing_s: (n,) the log time of the earliest message of each bin that differs
+            (a pair that scores, or an unpaired message that scores 1) [s since alignment],
+            inf in a bin without one; None when not computed.
         entered: (n,) bool, True for a bin where the channel's content grew in both runs at
             once and the two began to differ: the previous bin's messages were equal, and
             from it to this one the first message of each run gained the same number of
@@ -78,6 +81,7 @@ class ChannelSeries:
     messages: np.ndarray
     only_in: str | None = None
     entered: np.ndarray | None = None
+    first_differing_s: np.ndarray | None = None
 
 
 #: A message in a bin: (log time [ns], arrival, channel, payload, decoder, message). A message
@@ -150,6 +154,7 @@ class _Pending:
     leftover: list[tuple[int, _Entry]]  # (side, entry), in log-time order
     counts: tuple[int, int]
     entered: bool = False
+    first_diff: float = math.inf  # earliest log time of a differing pair [ns, aligned]
 
 
 def _match(xs: list[_Entry], ys: list[_Entry], reach_ns: float
@@ -203,6 +208,7 @@ class _Acc:
     unpaired: list[list[tuple[int, int]]] = field(default_factory=list)  # (aligned t, side)
     counts: list[tuple[int, int]] = field(default_factory=list)
     entered: list[bool] = field(default_factory=list)
+    first_diff: list[float] = field(default_factory=list)
     pending: _Pending | None = None
     #: the first messages of the last bin, when its messages were equal pair by pair
     equal_before: tuple[_Entry, _Entry] | None = None
@@ -218,6 +224,7 @@ class _Acc:
             self.unpaired.append([(e[0], side) for side, e in p.leftover])
             self.counts.append(p.counts)
             self.entered.append(p.entered)
+            self.first_diff.append(p.first_diff)
         self.pending = None
 
     def add_bin(
@@ -252,13 +259,18 @@ class _Acc:
                     taken.add(best)
                     y = leftover[best][1]
                     a, b = (x, y) if side == ACCIDENT else (y, x)
-                    p.scores.append(_score(a, b, tol))
+                    score = _score(a, b, tol)
+                    p.scores.append(score)
+                    if score:
+                        p.first_diff = min(p.first_diff, x[0], y[0])
                 else:
                     kept.append((side, x))
             p.leftover = kept
             leftover = [se for k, se in enumerate(leftover) if k not in taken]
         self.finish_pending()
-        self.pending = _Pending(index, scores, leftover, counts, entered)
+        first_diff = min((min(x[0], y[0]) for (x, y), sc in zip(pairs, scores, strict=True)
+                          if sc), default=math.inf)
+        self.pending = _Pending(index, scores, leftover, counts, entered, first_diff)
 
     def finish(self, times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float,
                origin: int) -> tuple[list[int], list[float], list[tuple[int, int]], list[bool],
@@ -276,19 +288,23 @@ class _Acc:
             origin: t = 0 on the accident's clock [ns].
 
         Returns:
-            (bins, values, counts, entered, set aside per side, outside the span per side).
+            (bins, values, counts, entered, the earliest differing message of each bin [s
+            since ``origin``, inf without one], set aside per side, outside the span per side).
         """
-        bins, values, counts, entered = [], [], [], []
+        bins, values, counts, entered, firsts = [], [], [], [], []
         aside, outside = [0, 0], [0, 0]
-        for b, total, n, loose, c, e in zip(self.bins, self.sums, self.paired, self.unpaired,
-                                            self.counts, self.entered, strict=True):
+        for b, total, n, loose, c, e, f in zip(self.bins, self.sums, self.paired, self.unpaired,
+                                               self.counts, self.entered, self.first_diff,
+                                               strict=True):
             scored = 0
+            first = f - origin
             for t_abs, side in loose:
                 t = t_abs - origin
                 if t > end_ns + bin_ns / 2:
                     outside[side] += 1
                 elif _silent(times[1 - side], times[side], t):
                     scored += 1
+                    first = min(first, t)
                 else:
                     aside[side] += 1
             if n + scored == 0:
@@ -297,7 +313,9 @@ class _Acc:
             values.append((total + scored) / (n + scored))
             counts.append(c)
             entered.append(e)
-        return bins, values, counts, entered, (aside[0], aside[1]), (outside[0], outside[1])
+            firsts.append(first / 1e9)
+        return (bins, values, counts, entered, firsts, (aside[0], aside[1]),
+                (outside[0], outside[1]))
 
 
 #: Half-width of the window around an unpaired message in which the two runs' messages on its
@@ -658,8 +676,8 @@ def _one_pass(
         a = acc.get(topic, _Acc())
         ts = (np.asarray(sorted(times[0].get(topic, ())), dtype=np.int64),
               np.asarray(sorted(times[1].get(topic, ())), dtype=np.int64))
-        bins, values, counts, entered, aside, outside = a.finish(ts, end_ns - origin, bin_ns,
-                                                                 origin)
+        bins, values, counts, entered, firsts, aside, outside = a.finish(
+            ts, end_ns - origin, bin_ns, origin)
         outside = (outside[0] + before[0].get(topic, 0), outside[1] + before[1].get(topic, 0))
         series[topic] = ChannelSeries(
             topic=topic,
@@ -668,6 +686,7 @@ def _one_pass(
             messages=np.asarray(counts, dtype=np.int64).reshape(-1, 2),
             only_in=only,
             entered=np.asarray(entered, dtype=bool),
+            first_differing_s=np.asarray(firsts, dtype=np.float64),
         )
         account = ChannelAccount(
             aside=aside,
