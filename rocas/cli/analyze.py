@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from rocas._fs import check_parent_exists, check_writable
+from rocas._fs import check_parent_exists, check_writable, safe_component
 from rocas.cli.console import Env
 from rocas.cli.exit_codes import ExitStatus
 
@@ -119,7 +119,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
             raise InputError(f"no such file: {source}", "check the path")
         name = source.stem
-    out = Path(args.out) if args.out else Path("runs") / name
+    # the name comes from the scenario or the file: one harmless component under runs/, never
+    # a path of its own (an absolute name or ../.. would put the run anywhere)
+    out = Path(args.out) if args.out else Path("runs") / safe_component(name)
     if args.out:
         check_parent_exists(out)  # the run directory is made; a mistyped folder above it is not
     if args.rrd:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from rocas._fs import check_parent_exists
-from rocas.analysis.cmg import load_cmg
+from rocas.cli.cmg import load_cmg_file
 from rocas.cli.console import Env
 from rocas.errors import TopologyError, UsageError
 from rocas.recording.annotate import annotate_recording, read_channels
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
             "give --cmg FILE (and/or --control-channel TOPIC)",
         )
     check_parent_exists(args.output)
-    spec = load_cmg(args.cmg) if args.cmg else None
+    spec = load_cmg_file(args.cmg) if args.cmg else None
     infos, _ = read_channels(args.recording)
     topics = {c.topic for c in infos}
     if args.control_channel and args.control_channel not in topics:

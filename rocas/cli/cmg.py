@@ -20,7 +20,7 @@ from rocas.analysis.cmg import (
     ChannelModuleGraph,
     ChannelTopology,
     CmgSpec,
-    load_cmg,
+    parse_cmg,
     resolve_topology,
 )
 from rocas.cli.console import Env, prose
@@ -264,8 +264,23 @@ def _print_text(view: CmgView, env: Env) -> None:
         out.print("Nothing missing: every channel has writers and readers.")
 
 
+def load_cmg_file(path: str) -> CmgSpec:
+    """A ``--cmg`` file, read with a size and a depth limit (``--cmg /dev/zero`` or a file
+    nested thousands deep is refused in one line), then validated."""
+    from rocas._limits import loads_json, read_text_limited
+    from rocas.errors import InputError
+
+    try:
+        text = read_text_limited(path, what="CMG file")
+        data = loads_json(text, origin=str(path))
+    except InputError as exc:
+        raise InputError(exc.message, exc.hint or
+                         'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}') from None
+    return parse_cmg(data, str(path))
+
+
 def run(args: argparse.Namespace, env: Env) -> int:
-    spec = load_cmg(args.cmg) if args.cmg else None
+    spec = load_cmg_file(args.cmg) if args.cmg else None
     view = build_view(args.recording, spec, args.control_channel, env)
     if args.format == "json":
         env.stdout.write(json.dumps(to_json(view), indent=2) + "\n")

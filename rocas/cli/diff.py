@@ -140,6 +140,7 @@ def render(result: DiffResult, env: Env) -> None:
 
 def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.analysis.diff import diff
+    from rocas.cli.cmg import load_cmg_file
 
     if args.rrd:
         check_writable(args.rrd)
@@ -147,7 +148,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         result = diff(
             args.accident,
             args.reference,
-            cmg=args.cmg,
+            cmg=load_cmg_file(args.cmg) if args.cmg else None,
             control_channel_topic=args.control_channel,
             bin_s=args.bin,
             delta_s=args.delta,
