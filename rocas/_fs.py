@@ -137,11 +137,12 @@ def safe_component(name: str, fallback: str = "unnamed") -> str:
     """``name`` (from a scenario, a recording, a campaign) as one harmless path component.
 
     Every run of characters other than letters, digits, ``.``, ``_`` and ``-`` becomes ``_``
-    (so no separator, no drive, nothing a shell or a terminal acts on), leading dots are
-    dropped (no ``..``, no hidden file) and the length is capped; what is left empty becomes
-    ``fallback``. A name that is already safe is returned unchanged.
+    (so no separator, no drive, nothing a shell or a terminal acts on), as does every run of
+    dots (no ``..``); leading dots are dropped (no hidden file) and the length is capped;
+    what is left empty becomes ``fallback``. A name that is already safe is returned unchanged.
     """
-    s = _UNSAFE_IN_NAME.sub("_", str(name)).lstrip("._")[:MAX_NAME_CHARS].rstrip("_")
+    s = re.sub(r"_{2,}", "_", re.sub(r"\.{2,}", "_", _UNSAFE_IN_NAME.sub("_", str(name))))
+    s = s.lstrip("._")[:MAX_NAME_CHARS].rstrip("_")
     return s or fallback
 
 

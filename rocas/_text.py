@@ -34,3 +34,14 @@ def printable(text: object) -> str:
         return s
     return _UNSHOWN.sub(_visible, s)
 
+
+
+def markdown_text(text: object) -> str:
+    """``text`` (a name from data) for a Markdown table cell or line: :func:`printable`, HTML
+    escaped (a renderer shows ``<img onerror=...>`` as text, never as markup) and with the
+    characters Markdown acts on in a cell (``|``, backticks, ``*``, ``[``, ``\\``) escaped
+    (``_`` inside a word, as in every catalog name, is left: Markdown does not act on it)."""
+    import html
+
+    s = html.escape(printable(text), quote=True)
+    return re.sub(r"([\\\\`*\[\]|])", r"\\\1", s)

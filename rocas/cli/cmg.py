@@ -20,10 +20,10 @@ from rocas.analysis.cmg import (
     ChannelModuleGraph,
     ChannelTopology,
     CmgSpec,
-    parse_cmg,
     resolve_topology,
 )
-from rocas.cli.console import Env, prose
+from rocas.cli.console import Env, prose, safe
+from rocas.cli.inputs import load_cmg_file
 from rocas.errors import RecordingError, TopologyError
 from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo, open_recording
 
@@ -229,7 +229,7 @@ def _print_text(view: CmgView, env: Env) -> None:
     out = env.out()
     if not out.is_terminal:  # a pipe or a file: never cut a topic or module name short
         out.width = max(out.width, 240)
-    table = Table(title=f"Channel-module graph of {view.recording}", title_justify="left")
+    table = Table(title=f"Channel-module graph of {safe(view.recording)}", title_justify="left")
     for col in ("channel", "encoding", "messages", "writers", "from", "readers", "from"):
         table.add_column(col, justify="right" if col == "messages" else "left")
     for topic, c in view.graph.topology.items():
@@ -237,9 +237,9 @@ def _print_text(view: CmgView, env: Env) -> None:
         encoding = ",".join(sorted({ch.message_encoding for ch in chans}))
         name = f"{topic} (control)" if c.is_control else topic
         table.add_row(
-            name, encoding, str(view.messages.get(topic, 0)),
-            ", ".join(c.writers) or "-", _source(c, "writers"),
-            ", ".join(c.readers) or "-", _source(c, "readers"),
+            safe(name), safe(encoding), str(view.messages.get(topic, 0)),
+            safe(", ".join(c.writers)) or "-", safe(_source(c, "writers")),
+            safe(", ".join(c.readers)) or "-", safe(_source(c, "readers")),
         )
     out.print(table)
     modules = view.graph.to_json()["modules"]
@@ -262,21 +262,6 @@ def _print_text(view: CmgView, env: Env) -> None:
             prose(out, f"  - {hint}")
     else:
         out.print("Nothing missing: every channel has writers and readers.")
-
-
-def load_cmg_file(path: str) -> CmgSpec:
-    """A ``--cmg`` file, read with a size and a depth limit (``--cmg /dev/zero`` or a file
-    nested thousands deep is refused in one line), then validated."""
-    from rocas._limits import loads_json, read_text_limited
-    from rocas.errors import InputError
-
-    try:
-        text = read_text_limited(path, what="CMG file")
-        data = loads_json(text, origin=str(path))
-    except InputError as exc:
-        raise InputError(exc.message, exc.hint or
-                         'expected {"modules": {"NAME": {"reads": [...], "writes": [...]}}}') from None
-    return parse_cmg(data, str(path))
 
 
 def run(args: argparse.Namespace, env: Env) -> int:

@@ -159,5 +159,8 @@ def safe(text: object) -> str:
 
 
 def prose(console: Console, *parts: object) -> None:
-    """Print one line of prose unbroken (the terminal, if any, wraps it)."""
-    console.print(*parts, soft_wrap=True)
+    """Print one line of prose unbroken (the terminal, if any, wraps it).
+
+    Text parts are printed as they read (through :func:`safe`: no markup, control characters
+    shown escaped), since prose carries names from data; rich objects are printed as they are."""
+    console.print(*(safe(p) if isinstance(p, str) else p for p in parts), soft_wrap=True)
