@@ -91,3 +91,18 @@ def test_a_campaign_json_that_is_not_an_object_is_refused(tmp_path):
     (tmp_path / "campaign.json").write_text("[1, 2]")
     with pytest.raises(InputError, match="not a JSON object"):
         read_campaign(tmp_path)
+
+
+def test_a_page_port_in_use_is_one_line(hostile_campaign):
+    import socket
+
+    from rocas.errors import OutputError
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        srv = CampaignServer(hostile_campaign[0], port=s.getsockname()[1], web_viewer_port=0)
+        with pytest.raises(OutputError, match="already in use") as e:
+            srv.start()
+        assert "--page-port" in e.value.hint
+    srv.stop()
