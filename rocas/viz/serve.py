@@ -106,6 +106,18 @@ def _connectable(host: str, port: int) -> bool:
         return False
 
 
+def rerun_executable() -> str:
+    """The Rerun viewer's executable: the binary rerun-sdk ships (``rerun_cli/rerun``) when it
+    is there, so that the server is the process rocas started and ends (the ``rerun`` script
+    on PATH is a launcher that starts it as a child); else ``rerun`` from PATH."""
+    try:
+        import rerun_cli
+    except ImportError:
+        return "rerun"
+    binary = os.path.join(os.path.dirname(rerun_cli.__file__), "rerun" + (".exe" if os.name == "nt" else ""))
+    return binary if os.path.isfile(binary) and os.access(binary, os.X_OK) else "rerun"
+
+
 class RerunWebServer:
     """Rerun's web viewer (and, for a file, its gRPC data proxy) in a ``rerun`` process bound to
     one address.
@@ -129,7 +141,8 @@ class RerunWebServer:
         self._log: tempfile._TemporaryFileWrapper[bytes] | None = None
 
     def command(self) -> list[str]:
-        cmd = ["rerun", "--serve-web", "--bind", self.host, "--web-viewer-port", str(self.web_port)]
+        cmd = [rerun_executable(), "--serve-web", "--bind", self.host,
+               "--web-viewer-port", str(self.web_port)]
         if self.grpc_port is not None:
             cmd += ["--port", str(self.grpc_port)]
         return cmd + self.sources
