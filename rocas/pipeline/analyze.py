@@ -80,7 +80,7 @@ def analyze(
             resumed = bool(state["done"])
             try:
                 return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
-            except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+            except (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError) as exc:
                 if not resumed:
                     raise
                 # a run directory is someone's data: what read_state and the phases' own
