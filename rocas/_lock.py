@@ -13,7 +13,7 @@ import os
 from collections.abc import Iterator
 from pathlib import Path
 
-from rocas.errors import UsageError
+from rocas.errors import OutputError, UsageError
 
 try:
     import fcntl
@@ -45,12 +45,17 @@ def locked_directory(path: str | os.PathLike[str], what: str = "run directory") 
 
     Raises:
         UsageError: another process holds it (exit 2; the message names its pid when known).
+        OutputError: it cannot be opened (not a directory, no permission).
     """
     p = Path(path)
     if fcntl is None:
         yield
         return
-    fd = os.open(p, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError as exc:
+        raise OutputError(f"cannot lock {what} {p}: {exc.strerror or exc}",
+                          "choose a place you can read and write") from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -43,5 +43,5 @@ def markdown_text(text: object) -> str:
     (``_`` inside a word, as in every catalog name, is left: Markdown does not act on it)."""
     import html
 
-    s = html.escape(printable(text), quote=True)
+    s = html.escape(printable(text), quote=False)  # quotes act only inside a tag
     return re.sub(r"([\\\\`*\[\]|])", r"\\\1", s)
