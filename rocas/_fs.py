@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -124,3 +125,43 @@ def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+#: what a path component made from data may hold: letters, digits, ``.``, ``_``, ``-``
+_UNSAFE_IN_NAME = re.compile(r"[^A-Za-z0-9._-]+")
+#: the longest path component made from data [characters] (file systems allow 255 bytes)
+MAX_NAME_CHARS = 120
+
+
+def safe_component(name: str, fallback: str = "unnamed") -> str:
+    """``name`` (from a scenario, a recording, a campaign) as one harmless path component.
+
+    Every run of characters other than letters, digits, ``.``, ``_`` and ``-`` becomes ``_``
+    (so no separator, no drive, nothing a shell or a terminal acts on), as does every run of
+    dots (no ``..``); leading dots are dropped (no hidden file) and the length is capped;
+    what is left empty becomes ``fallback``. A name that is already safe is returned unchanged.
+    """
+    s = re.sub(r"_{2,}", "_", re.sub(r"\.{2,}", "_", _UNSAFE_IN_NAME.sub("_", str(name))))
+    s = s.lstrip("._")[:MAX_NAME_CHARS].rstrip("_")
+    return s or fallback
+
+
+def is_safe_component(name: object) -> bool:
+    """True when ``name`` is a string that :func:`safe_component` leaves as it is."""
+    return isinstance(name, str) and bool(name) and safe_component(name, fallback="") == name
+
+
+def inside(base: str | os.PathLike[str], *parts: str) -> Path:
+    """``base / parts...``, checked to resolve inside ``base`` (links followed).
+
+    Raises:
+        InputError: the path leaves ``base`` (an absolute part, ``..``, a link out).
+    """
+    from rocas.errors import InputError
+
+    root = Path(base).resolve()
+    target = root.joinpath(*parts).resolve()
+    if target != root and root not in target.parents:
+        raise InputError(f"{Path(base).joinpath(*parts)} leads outside {base}",
+                         "the name comes from a file someone else wrote; it is refused")
+    return target

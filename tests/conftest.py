@@ -68,12 +68,13 @@ def ray_cluster():
     """One local Ray (two CPUs) for the whole test run: starting one takes seconds. Skipped
     where Ray, an optional extra (``rocas[ray]``, part of the dev extras), is missing."""
     ray = pytest.importorskip("ray")
-    from rocas.search.ray_executor import LOCAL_OBJECT_STORE_BYTES
+    from rocas.search.ray_executor import LOCAL_OBJECT_STORE_BYTES, _private_ray_environment
 
     started = not ray.is_initialized()
-    if started:
-        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False,
-                 object_store_memory=LOCAL_OBJECT_STORE_BYTES)
+    if started:  # on loopback with its token, as the executor's own private Ray
+        with _private_ray_environment(ray):
+            ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
+                     configure_logging=False, object_store_memory=LOCAL_OBJECT_STORE_BYTES)
     yield ray
     if started:
         ray.shutdown()

@@ -22,6 +22,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from rocas._fs import safe_component
 from rocas.errors import InputError
 
 RECORDING_SUFFIXES = (".mcap",)
@@ -88,9 +89,10 @@ def collect_inputs(specs: list[str]) -> list[CampaignInput]:
     names: set[str] = set()
     out = []
     for f in unique:
-        name, n = f.stem, 2
+        stem = safe_component(f.stem)  # the run directory's name: one harmless component
+        name, n = stem, 2
         while name in names:  # the same stem from two folders
-            name, n = f"{f.stem}-{n}", n + 1
+            name, n = f"{stem}-{n}", n + 1
         names.add(name)
         kind = "recording" if f.suffix in RECORDING_SUFFIXES else "scenario"
         truth_type, title = documented_type(f)

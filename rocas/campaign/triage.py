@@ -26,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import write_text_atomic
+from rocas._lock import locked_directory
+from rocas._text import markdown_text
 from rocas.campaign.grouping import documented_keys, group_accidents, root_cause_keys, scores
 from rocas.campaign.inputs import CampaignInput
 from rocas.errors import RocasError, UsageError
@@ -65,6 +67,12 @@ def triage(
     if len(set(names)) != len(names):
         raise UsageError("two accidents of the campaign have the same name")
     (out / "runs").mkdir(parents=True, exist_ok=True)
+    with locked_directory(out, "campaign directory"):  # a second triage into it is refused
+        return _triage(inputs, out, cfg, progress, executor)
+
+
+def _triage(inputs: Sequence[CampaignInput], out: Path, cfg: AnalyzeConfig,
+            progress: CampaignProgress, executor: Executor | None) -> dict[str, Any]:
     settings = {k: getattr(cfg, k) for k in REPORT_SETTINGS}
     write_text_atomic(out / "inputs.json", json.dumps(
         {"settings": settings, "accidents": [_input_json(i) for i in inputs]}, indent=2) + "\n")
@@ -212,7 +220,9 @@ def _pct(x: float | None) -> str:
 
 
 def markdown(c: dict[str, Any]) -> str:
-    """campaign.md: the groups, the failures and the scores."""
+    """campaign.md: the groups, the failures and the scores (every name from data escaped:
+    :func:`rocas._text.markdown_text`)."""
+    md = markdown_text
     lines = ["# rocas triage", "",
              f"{c['analysed']} of {c['accidents_total']} accidents analysed in "
              f"{len(c['groups'])} groups"
@@ -224,11 +234,12 @@ def markdown(c: dict[str, Any]) -> str:
         agree = ", ".join(f"{k} {v}" for k, v in g["agreement"].items())
         types = ", ".join(f"{k} {v}" for k, v in g["types"].items())
         doc = {True: "yes", False: "no"}.get(g.get("documented"), "")
-        lines.append(f"| {g['id']} | {g['root_cause']} | {g['count']} | {agree} | {types} | {doc} |")
+        lines.append(f"| {md(g['id'])} | {md(g['root_cause'])} | {g['count']} | {md(agree)} | "
+                     f"{md(types)} | {doc} |")
     lines.append("")
     if c["failed"]:
         lines += ["## Failed to analyse", ""]
-        lines += [f"- `{f['name']}` ({f['source']}): {f['reason']}" for f in c["failed"]]
+        lines += [f"- {md(f['name'])} ({md(f['source'])}): {md(f['reason'])}" for f in c["failed"]]
         lines.append("")
     sc = c.get("scores")
     if sc:
@@ -243,7 +254,7 @@ def markdown(c: dict[str, Any]) -> str:
                   "",
                   "| type | accidents | in its largest group | groups |", "|---|---|---|---|"]
         for t, v in sc["types"].items():
-            lines.append(f"| {t} | {v['accidents']} | {v['in_largest']} ({_pct(v['completeness'])}) "
+            lines.append(f"| {md(t)} | {v['accidents']} | {v['in_largest']} ({_pct(v['completeness'])}) "
                          f"| {v['groups']} |")
         lines.append("")
     lines += ["## Accidents", "", "| accident | group | verdict | module | agreement | type |",
@@ -251,6 +262,6 @@ def markdown(c: dict[str, Any]) -> str:
     for a in c["accidents"]:
         conf = a.get("confidence") or {}
         agree = f"{conf.get('level')} ({conf.get('same')}/{conf.get('runs')})" if conf else "n/a"
-        lines.append(f"| {a['name']} | {a['group']} | {a['verdict']} | {a['deviating_module']} | "
-                     f"{agree} | {a['truth_type'] or ''} |")
+        lines.append(f"| {md(a['name'])} | {md(a['group'])} | {md(a['verdict'])} | "
+                     f"{md(a['deviating_module'])} | {md(agree)} | {md(a['truth_type'] or '')} |")
     return "\n".join(lines) + "\n"

@@ -8,8 +8,8 @@ import math
 from pathlib import Path
 from typing import Any
 
-from rocas._fs import check_parent_exists, check_writable
-from rocas.cli.console import Env
+from rocas._fs import check_parent_exists, check_writable, safe_component
+from rocas.cli.console import Env, safe
 from rocas.cli.exit_codes import ExitStatus
 
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
@@ -119,7 +119,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
             raise InputError(f"no such file: {source}", "check the path")
         name = source.stem
-    out = Path(args.out) if args.out else Path("runs") / name
+    # the name comes from the scenario or the file: one harmless component under runs/, never
+    # a path of its own (an absolute name or ../.. would put the run anywhere)
+    out = Path(args.out) if args.out else Path("runs") / safe_component(name)
     if args.out:
         check_parent_exists(out)  # the run directory is made; a mistyped folder above it is not
     if args.rrd:
@@ -146,7 +148,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     else:
         render(report, out, env)
         if args.rrd:
-            env.out().print(f"Rerun recording: {args.rrd}")
+            env.out().print(f"Rerun recording: {safe(args.rrd)}")
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
 
 
@@ -265,8 +267,8 @@ class _Progress:
 
     def __call__(self, phase: str, info: dict[str, Any]) -> None:
         if phase == "answer":  # the answer before phase V checks it: said at once, above the bars
-            self._p.console.print(f"[bold]found[/bold]: {info['module']} misconfigured, {info['fix']} "
-                                  "(validating the fix)", highlight=False)
+            self._p.console.print(f"[bold]found[/bold]: {safe(info['module'])} misconfigured, "
+                                  f"{safe(info['fix'])} (validating the fix)", highlight=False)
             return
         if "planned" in info:  # a search's planned simulations, sent as it starts
             info = dict(info)
@@ -294,7 +296,7 @@ class _Progress:
                 total = self._done[phase] = info.pop("simulations")
                 n = info.pop("evaluations", 0)
                 self._p.update(task, total=total, completed=n, count=f"{n}/{total}")
-            self._p.update(task, info=", ".join(f"{k} {v}" for k, v in info.items()))
+            self._p.update(task, info=safe(", ".join(f"{k} {v}" for k, v in info.items())))
 
 
 def render(report: dict[str, Any], out: Path, env: Env) -> None:
@@ -321,58 +323,62 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     t = Table(show_header=False, box=None, padding=(0, 1))
     t.add_column(style="bold")
     t.add_column()
+
+    def row(label: str, text: str, markup: str = "") -> None:
+        t.add_row(label, safe(text) + markup)  # names from data print as they read
+
     acc = report["accident"]
-    t.add_row("verdict", report["verdict"].replace("_", " ")
+    row("verdict", report["verdict"].replace("_", " ")
               + ("" if report.get("complete", True) else "  (from less than the whole recording)"))
     for w in report.get("warnings", []):
-        t.add_row("warning", w)
+        row("warning", w)
     if report.get("replay"):
-        t.add_row("replay", replay_text(report))
+        row("replay", replay_text(report))
     if acc:
-        t.add_row("accident", accident_text(acc))
+        row("accident", accident_text(acc))
     trig = report["triggering_entity"]
     if trig:
         for p in trig["properties"]:
-            t.add_row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
+            row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
     if report["deviating_module"]:
         walk = " -> ".join(report["path"]) or "-"
-        t.add_row("deviating module", f"{report['deviating_module']}   walk: {walk}")
+        row("deviating module", f"{report['deviating_module']}   walk: {walk}")
         if report.get("walk_fallback"):
-            t.add_row("", f"({report['walk_fallback']})")
+            row("", f"({report['walk_fallback']})")
         if report.get("entries_passed"):
-            t.add_row("", f"({entries_passed_text(report)})")
+            row("", f"({entries_passed_text(report)})")
         if report.get("cleared_passed"):
-            t.add_row("", f"({cleared_passed_text(report)})")
+            row("", f"({cleared_passed_text(report)})")
         if report.get("window_passed"):
-            t.add_row("", f"({report['window_passed']})")
+            row("", f"({report['window_passed']})")
         if report.get("walk_named"):
-            t.add_row("", f"({walk_named_text(report)})")
+            row("", f"({walk_named_text(report)})")
     if report.get("confidence"):
-        t.add_row("confidence", confidence_text(report))
+        row("confidence", confidence_text(report))
     for m in report["misconfiguration"]:
-        t.add_row("misconfiguration", change(m, "->"))
+        row("misconfiguration", change(m, "->"))
     for alt in report.get("alternatives", []):
-        t.add_row("nearly as small", ", ".join(change(m, "->") for m in alt["misconfiguration"])
+        row("nearly as small", ", ".join(change(m, "->") for m in alt["misconfiguration"])
                   + f"  (h2 {alt['h2']:.4g})")
     for fix in report.get("other_fixes", []):
-        t.add_row("larger fix", other_fix_text(fix, "->"))
+        row("larger fix", other_fix_text(fix, "->"))
     v = report["validation"]
     if v and v["variants"]:
         orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]
-        t.add_row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
-                  f"(original) vs {fixed:.0f} % (fixed)"
-                  + ("  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else "")
-                  + (f"; {regression_text(v)}" if regression_text(v) else ""))
-        t.add_row("robust value", robust_text(report, "->")
+        row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
+            f"(original) vs {fixed:.0f} % (fixed)"
+            + (f"; {regression_text(v)}" if regression_text(v) else ""),
+            "  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else "")
+        row("robust value", robust_text(report, "->")
                   + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
     ss = report["search_space"]
     if ss["parameters_searched"]:
-        t.add_row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "
+        row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "
                   f"({100 * (ss['reduction'] or 0):.1f} % reduction)")
-    t.add_row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report["timings_s"].items()))
-    t.add_row("simulations", ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
+    row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report["timings_s"].items()))
+    row("simulations", ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
     if report.get("settings"):
-        t.add_row("settings", settings_text(report))
-    t.add_row("run directory", str(out))
+        row("settings", settings_text(report))
+    row("run directory", str(out))
     con.print(t)
-    con.print(Panel(report["explanation"], title="why", expand=False))
+    con.print(Panel(safe(report["explanation"]), title="why", expand=False))

@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 
 from rocas._fs import check_parent_exists
-from rocas.analysis.cmg import load_cmg
-from rocas.cli.console import Env
+from rocas.cli.console import Env, safe
+from rocas.cli.inputs import load_cmg_file
 from rocas.errors import TopologyError, UsageError
 from rocas.recording.annotate import annotate_recording, read_channels
 
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
             "give --cmg FILE (and/or --control-channel TOPIC)",
         )
     check_parent_exists(args.output)
-    spec = load_cmg(args.cmg) if args.cmg else None
+    spec = load_cmg_file(args.cmg) if args.cmg else None
     infos, _ = read_channels(args.recording)
     topics = {c.topic for c in infos}
     if args.control_channel and args.control_channel not in topics:
@@ -60,15 +60,15 @@ def run(args: argparse.Namespace, env: Env) -> int:
         "unchunked" if report.compression is None
         else f"{report.compression or 'uncompressed'} chunks"
     )
-    out.print(f"wrote {report.output}")
+    out.print(f"wrote {safe(report.output)}")
     changed = ", ".join(report.annotated) if report.annotated else "none (already as given)"
-    out.print(f"  topology set on {len(report.annotated)} channel(s): {changed}")
+    out.print(f"  topology set on {len(report.annotated)} channel(s): {safe(changed)}")
     if report.control_channel:
-        out.print(f"  control channel: {report.control_channel}")
+        out.print(f"  control channel: {safe(report.control_channel)}")
     out.print(
         f"  copied {report.schemas} schemas, {report.channels} channels, {report.messages} "
         f"messages, {report.attachments} attachments, {report.metadata} metadata records "
-        f"({compression}, profile {report.profile or 'none'!s})"
+        f"({compression}, profile {safe(report.profile or 'none')})"
     )
-    out.print(f"  check it with: rocas cmg {report.output}")
+    out.print(f"  check it with: rocas cmg {safe(report.output)}")
     return 0

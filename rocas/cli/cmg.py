@@ -20,10 +20,10 @@ from rocas.analysis.cmg import (
     ChannelModuleGraph,
     ChannelTopology,
     CmgSpec,
-    load_cmg,
     resolve_topology,
 )
-from rocas.cli.console import Env, prose
+from rocas.cli.console import Env, prose, safe
+from rocas.cli.inputs import load_cmg_file
 from rocas.errors import RecordingError, TopologyError
 from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo, open_recording
 
@@ -229,7 +229,7 @@ def _print_text(view: CmgView, env: Env) -> None:
     out = env.out()
     if not out.is_terminal:  # a pipe or a file: never cut a topic or module name short
         out.width = max(out.width, 240)
-    table = Table(title=f"Channel-module graph of {view.recording}", title_justify="left")
+    table = Table(title=f"Channel-module graph of {safe(view.recording)}", title_justify="left")
     for col in ("channel", "encoding", "messages", "writers", "from", "readers", "from"):
         table.add_column(col, justify="right" if col == "messages" else "left")
     for topic, c in view.graph.topology.items():
@@ -237,9 +237,9 @@ def _print_text(view: CmgView, env: Env) -> None:
         encoding = ",".join(sorted({ch.message_encoding for ch in chans}))
         name = f"{topic} (control)" if c.is_control else topic
         table.add_row(
-            name, encoding, str(view.messages.get(topic, 0)),
-            ", ".join(c.writers) or "-", _source(c, "writers"),
-            ", ".join(c.readers) or "-", _source(c, "readers"),
+            safe(name), safe(encoding), str(view.messages.get(topic, 0)),
+            safe(", ".join(c.writers)) or "-", safe(_source(c, "writers")),
+            safe(", ".join(c.readers)) or "-", safe(_source(c, "readers")),
         )
     out.print(table)
     modules = view.graph.to_json()["modules"]
@@ -265,7 +265,7 @@ def _print_text(view: CmgView, env: Env) -> None:
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
-    spec = load_cmg(args.cmg) if args.cmg else None
+    spec = load_cmg_file(args.cmg) if args.cmg else None
     view = build_view(args.recording, spec, args.control_channel, env)
     if args.format == "json":
         env.stdout.write(json.dumps(to_json(view), indent=2) + "\n")

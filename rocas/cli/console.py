@@ -7,6 +7,8 @@ import threading
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TextIO
 
+from rocas._text import printable
+
 if TYPE_CHECKING:
     from rich.console import Console
 
@@ -45,12 +47,12 @@ class Env:
         return Console(file=self.stderr, highlight=False, width=None if _isatty(self.stderr) else 160)
 
     def warn(self, message: str) -> None:
-        """One ``rocas: warning: ...`` line on stderr."""
-        print(f"rocas: warning: {message}", file=self.stderr, flush=True)
+        """One ``rocas: warning: ...`` line on stderr (control characters shown escaped)."""
+        print(f"rocas: warning: {printable(message)}", file=self.stderr, flush=True)
 
     def error(self, message: str) -> None:
-        """One ``rocas: error: ...`` line on stderr."""
-        print(f"rocas: error: {message}", file=self.stderr, flush=True)
+        """One ``rocas: error: ...`` line on stderr (control characters shown escaped)."""
+        print(f"rocas: error: {printable(message)}", file=self.stderr, flush=True)
 
     def progress(self, description: str, *, enabled: bool = True) -> Progress:
         """A progress display on stderr for one step (a context manager).
@@ -144,6 +146,21 @@ def _isatty(stream: TextIO) -> bool:
         return False
 
 
+def safe(text: object) -> str:
+    """``text`` (a name from data: a topic, a module, an entity, a file) ready for a rich
+    console: control characters and escape sequences shown escaped (:func:`rocas._text.printable`)
+    and rich markup escaped, so that ``[/`` or ``[bold]`` in a name print as themselves.
+
+    Every name from a recording, a scenario, a campaign or a run directory that reaches a rich
+    ``print`` or a table cell goes through here; plain ``print`` lines use ``printable``."""
+    from rich.markup import escape
+
+    return escape(printable(text))
+
+
 def prose(console: Console, *parts: object) -> None:
-    """Print one line of prose unbroken (the terminal, if any, wraps it)."""
-    console.print(*parts, soft_wrap=True)
+    """Print one line of prose unbroken (the terminal, if any, wraps it).
+
+    Text parts are printed as they read (through :func:`safe`: no markup, control characters
+    shown escaped), since prose carries names from data; rich objects are printed as they are."""
+    console.print(*(safe(p) if isinstance(p, str) else p for p in parts), soft_wrap=True)

@@ -7,7 +7,7 @@ import json
 from typing import TYPE_CHECKING
 
 from rocas._fs import check_writable
-from rocas.cli.console import Env, prose
+from rocas.cli.console import Env, printable, prose, safe
 
 if TYPE_CHECKING:
     from rocas.analysis.changepoints import ChangePointConfig
@@ -119,13 +119,13 @@ def render(result: DiffResult, env: Env) -> None:
         change = "—"
         if c.mdr_after is not None and c.mdr_before is not None:
             change = f"{c.mdr_after - c.mdr_before:+.3f}"
-        topic = Text(c.topic, style="bold" if c.topic in on_path else "")
+        topic = Text(printable(c.topic), style="bold" if c.topic in on_path else "")
         if c.only_in:
-            topic.append(f" (only in {c.only_in})", style="yellow")
+            topic.append(printable(f" (only in {c.only_in})"), style="yellow")
         converges = c.change_points.converges_s
         if converges:
             topic.append(f" (converges at {converges[0]:.2f} s)", style="cyan")
-        table.add_row(topic, ", ".join(c.writers) or "—", _num(c.change_point_s, ".2f"),
+        table.add_row(topic, safe(", ".join(c.writers)) or "—", _num(c.change_point_s, ".2f"),
                       _num(c.mdr_before), _num(c.mdr_after), change)
     out.print(table)
     out.print()
@@ -136,10 +136,10 @@ def render(result: DiffResult, env: Env) -> None:
     if p.deviating_module:
         prose(out, "Walk:  " + " -> ".join(p.path))
         out.print(Text.assemble("Initial deviating module: ",
-                                (p.deviating_module, "bold red")))
+                                (printable(p.deviating_module), "bold red")))
     else:
         out.print(Text(
-            f"No deviating module: no module reachable from {p.control_channel} has a change "
+            f"No deviating module: no module reachable from {printable(p.control_channel)} has a change "
             + ("point." if p.fallback else "point within the reaction window."), style="yellow"))
     e = result.entries
     if e is not None and e.deviating_module != p.deviating_module:
@@ -185,6 +185,7 @@ def comparison_lines(result: DiffResult) -> list[str]:
 
 def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.analysis.diff import diff
+    from rocas.cli.inputs import load_cmg_file
 
     if args.rrd:
         check_writable(args.rrd)
@@ -192,7 +193,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         result = diff(
             args.accident,
             args.reference,
-            cmg=args.cmg,
+            cmg=load_cmg_file(args.cmg) if args.cmg else None,
             control_channel_topic=args.control_channel,
             bin_s=args.bin,
             delta_s=args.delta,
@@ -217,5 +218,5 @@ def run(args: argparse.Namespace, env: Env) -> int:
     else:
         render(result, env)
         if args.rrd:
-            env.out().print(f"Rerun recording: {args.rrd}")
+            env.out().print(f"Rerun recording: {safe(args.rrd)}")
     return 0

@@ -126,6 +126,11 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
             env.stdout.flush()  # a full disk under stdout is an output error, not a bug
             return status
     except OSError as exc:
+        if isinstance(exc, BrokenPipeError) or exc.errno == errno.EPIPE:
+            # the reader stopped (``rocas params --json | head``): end quietly, as head expects;
+            # stdout goes to /dev/null so the interpreter's own flush at exit says nothing either
+            _silence_stdout(env)
+            return ExitStatus.SUCCESS
         if exc.errno not in _OUTPUT_ERRNOS:
             return _internal(exc, args, env)
         if args.traceback:
@@ -150,8 +155,6 @@ def main(argv: Sequence[str] | None = None, env: Env | None = None) -> int:
         else:
             env.error(str(exc))
         return exit_status_for(exc)
-    except BrokenPipeError:
-        return ExitStatus.SUCCESS
     except Exception as exc:  # a bug: say so in one line, full story with --traceback
         return _internal(exc, args, env)
 

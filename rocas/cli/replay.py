@@ -6,7 +6,7 @@ import argparse
 import json
 
 from rocas._fs import check_writable
-from rocas.cli.console import Env
+from rocas.cli.console import Env, printable
 from rocas.errors import NotReproducedError, UsageError
 
 HELP = "rebuild the scenario of a recording, re-run it closed-loop and report the fidelity"
@@ -50,12 +50,13 @@ def run(args: argparse.Namespace, env: Env) -> int:
         print(json.dumps(report.to_dict(), indent=2), file=env.stdout)
     else:
         out = env.stdout
-        print(f"{rec.scenario.name}: {len(rec.scenario.actors)} actors rebuilt from "
-              f"perception ({', '.join(a.id for a in rec.scenario.actors) or 'none'})", file=out)
-        print(f"  original: {_accident(report.original)}", file=out)
-        what_if = f" (with {', '.join(args.assignments)})" if overrides else ""
-        print(f"  replay{what_if}: {_accident(report.accident)} -- {report.outcome.summary()}",
+        print(printable(f"{rec.scenario.name}: {len(rec.scenario.actors)} actors rebuilt from "
+                        f"perception ({', '.join(a.id for a in rec.scenario.actors) or 'none'})"),
               file=out)
+        print(printable(f"  original: {_accident(report.original)}"), file=out)
+        what_if = f" (with {', '.join(args.assignments)})" if overrides else ""
+        print(printable(f"  replay{what_if}: {_accident(report.accident)} -- "
+                        f"{report.outcome.summary()}"), file=out)
         verdict = "reproduced" if report.reproduced else "NOT reproduced"
         if report.only_emergency:
             verdict = ("the emergency before the recorded collision reproduced, not the "

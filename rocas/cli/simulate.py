@@ -8,7 +8,7 @@ import dataclasses
 import json
 
 from rocas._fs import check_writable
-from rocas.cli.console import Env
+from rocas.cli.console import Env, printable
 from rocas.errors import ScenarioError, UsageError
 
 HELP = "simulate a scenario with a stack (default: the built-in ADS), recording every channel to MCAP"
@@ -92,6 +92,6 @@ def run(args: argparse.Namespace, env: Env) -> int:
             payload["min_separation_m"] = None
         print(json.dumps(payload, indent=2), file=env.stdout)
     else:
-        print(f"{scenario.name}: {out.summary()} -> {result.recording} "
-              f"({result.messages} messages)", file=env.stdout)
+        print(printable(f"{scenario.name}: {out.summary()} -> {result.recording} "
+                        f"({result.messages} messages)"), file=env.stdout)
     return 0

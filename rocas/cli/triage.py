@@ -9,7 +9,7 @@ from typing import Any
 
 from rocas._fs import check_parent_exists
 from rocas.cli.analyze import add_executor_arguments, add_search_arguments
-from rocas.cli.console import Env
+from rocas.cli.console import Env, safe
 from rocas.cli.exit_codes import ExitStatus
 
 HELP = "analyse every accident of a campaign and group them by root cause"
@@ -88,10 +88,11 @@ class _CampaignBar:
 
     def __call__(self, k: int, n: int, name: str, phase: str, info: dict[str, Any]) -> None:
         if phase == "done":
-            self._p.update(self._task, completed=k + 1, info=f"{name}: {info.get('verdict') or 'failed'}")
+            self._p.update(self._task, completed=k + 1,
+                           info=safe(f"{name}: {info.get('verdict') or 'failed'}"))
             return
         detail = f", gen {info['generation']}" if "generation" in info else ""
-        self._p.update(self._task, completed=k, info=f"{name}: {phase}{detail}")
+        self._p.update(self._task, completed=k, info=safe(f"{name}: {phase}{detail}"))
 
 
 def render(c: dict[str, Any], out: Path, env: Env) -> None:
@@ -104,13 +105,13 @@ def render(c: dict[str, Any], out: Path, env: Env) -> None:
                 "documented root cause"):
         t.add_column(col)
     for g in c["groups"]:
-        t.add_row(g["id"], g["root_cause"], str(g["count"]),
-                  ", ".join(f"{k} {v}" for k, v in g["agreement"].items()),
-                  ", ".join(f"{k} {v}" for k, v in g["types"].items()),
+        t.add_row(safe(g["id"]), safe(g["root_cause"]), str(g["count"]),
+                  safe(", ".join(f"{k} {v}" for k, v in g["agreement"].items())),
+                  safe(", ".join(f"{k} {v}" for k, v in g["types"].items())),
                   {True: "yes", False: "no"}.get(g.get("documented"), ""))
     con.print(t)
     for f in c["failed"]:
-        con.print(f"failed: {f['name']} ({f['source']}): {f['reason']}", soft_wrap=True)
+        con.print(safe(f"failed: {f['name']} ({f['source']}): {f['reason']}"), soft_wrap=True)
     sc = c.get("scores")
     if sc:
         con.print(f"completeness {100 * sc['completeness']:.1f} % (worst type "
@@ -124,4 +125,4 @@ def render(c: dict[str, Any], out: Path, env: Env) -> None:
                       f"({100 * sc['documented_share']:.1f} %)", soft_wrap=True)
     else:
         con.print("completeness and purity: no accident has a documented type")
-    con.print(f"campaign directory: {out} (campaign.json, campaign.md)", soft_wrap=True)
+    con.print(f"campaign directory: {safe(out)} (campaign.json, campaign.md)", soft_wrap=True)

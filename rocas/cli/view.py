@@ -2,8 +2,9 @@
 
 Opens the native viewer when a display is available (it is given a file it may read whenever
 it likes: rocas never removes it under the viewer, and says whether the viewer started or
-failed); with ``--web`` (or without a display) serves Rerun's web viewer on localhost and
-prints its address until Ctrl-C. ``--rrd`` also
+failed); with ``--web`` (or without a display) serves Rerun's web viewer and its data on
+127.0.0.1 (``--bind ADDRESS`` for another, with a warning) and prints its address until Ctrl-C.
+``--rrd`` also
 writes the recording (with its default layout) to a file; ``--no-viewer`` only writes it.
 """
 
@@ -18,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rocas._fs import check_writable
-from rocas.cli.console import Env
+from rocas.cli.console import Env, safe
 from rocas.errors import InputError, UsageError
 
 HELP = "open a recording or an analysis run directory in the Rerun viewer"
@@ -38,6 +39,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grpc-port", type=int, default=9876, help="gRPC data port (default 9876)")
     p.add_argument("--page-port", type=int, default=8080,
                    help="with a campaign directory: the campaign page's port (default 8080)")
+    p.add_argument("--bind", metavar="ADDRESS", default="127.0.0.1",
+                   help="the address the web viewer, its data and the campaign page listen on "
+                        "(default 127.0.0.1: this machine only; 0.0.0.0 opens them to the "
+                        "network, with a warning)")
 
 
 def has_display(environ: dict[str, str] | None = None) -> bool:
@@ -77,6 +82,13 @@ def run(args: argparse.Namespace, env: Env) -> int:
         raise InputError(f"{source}: no such file or directory")
     if args.no_viewer and not args.rrd:
         raise UsageError("--no-viewer needs --rrd OUT.rrd")
+    from rocas.viz.serve import bind_warning, check_bind_address
+
+    args.bind = check_bind_address(args.bind)
+    for port, option in ((args.web_port, "--web-port"), (args.grpc_port, "--grpc-port"),
+                         (args.page_port, "--page-port")):
+        if not 0 <= port <= 65535:
+            raise UsageError(f"{option} {port} is not a port (0-65535)")
     if source.is_dir() and (source / "campaign.json").exists():
         return _serve_campaign(source, args, env)
     keep = Path(args.rrd) if args.rrd else None
@@ -94,23 +106,27 @@ def run(args: argparse.Namespace, env: Env) -> int:
         tmpdir = tempfile.TemporaryDirectory(prefix="rocas-view-")
         out = Path(tmpdir.name) / "view.rrd"
     try:
-        with env.progress(f"Writing the Rerun recording of {source.name}"):
+        with env.progress(f"Writing the Rerun recording of {safe(source.name)}"):
             summary, warnings = write_rrd(source, out)
         for line in warnings:
             env.warn(line)
         if keep is not None:
-            env.out().print(f"Rerun recording: {keep} ({summary})")
+            env.out().print(f"Rerun recording: {safe(keep)} ({safe(summary)})", soft_wrap=True)
         if args.no_viewer:
             return 0
         if not native:
+            warning = bind_warning(args.bind)
+            if warning:
+                env.warn(warning)
             return _serve_web(out, args, env)
         pid, running = _spawn_native(out, args)
-        left = "" if keep is not None else f"; it reads {out}, which is left for it"
+        left = "" if keep is not None else f"; it reads {safe(out)}, which is left for it"
         if running:
-            env.out().print(f"Started the Rerun viewer (process {pid}){left}.")
+            env.out().print(f"Started the Rerun viewer (process {pid}){left}.", soft_wrap=True)
         else:
             env.out().print(f"The Rerun viewer (process {pid}) took the file and exited at once "
-                            f"with status 0 (a viewer already open may show it){left}.")
+                            f"with status 0 (a viewer already open may show it){left}.",
+                            soft_wrap=True)
         return 0
     finally:
         if tmpdir is not None:
@@ -128,10 +144,13 @@ def _spawn_native(out: Path, args: argparse.Namespace) -> tuple[int, bool]:
     import subprocess
 
     from rocas.errors import RocasError
+    from rocas.viz.serve import LOOPBACK, check_port_free
 
+    # the native viewer also listens for SDKs on --grpc-port: on loopback, never the network
+    check_port_free(LOOPBACK, args.grpc_port, "--grpc-port")
     try:
         proc = subprocess.Popen(
-            ["rerun", "--port", str(args.grpc_port), str(out)],
+            ["rerun", "--bind", LOOPBACK, "--port", str(args.grpc_port), str(out)],
             start_new_session=True,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
@@ -158,15 +177,21 @@ def _spawn_native(out: Path, args: argparse.Namespace) -> tuple[int, bool]:
 
 
 def _serve_web(out: Path, args: argparse.Namespace, env: Env) -> int:
-    from rocas.viz.stream import new_recording_id  # noqa: I001 - first: it quiets Rerun's logs
-    import rerun as rr
+    """Rerun's web viewer and its gRPC data proxy, both on ``--bind``, serving ``out``."""
+    from urllib.parse import quote
 
-    rec = rr.RecordingStream("rocas", recording_id=new_recording_id("view"))
-    url = rec.serve_grpc(grpc_port=args.grpc_port)
-    rr.serve_web_viewer(web_port=args.web_port, open_browser=False, connect_to=url)
-    rec.log_file_from_path(out)
-    address = f"http://localhost:{args.web_port}/?url={url}"
-    return _serve_until_interrupt(env, f"Rerun web viewer: {address}", rec.disconnect)
+    from rocas.viz.serve import RerunWebServer, free_port, url_host
+
+    grpc_port = args.grpc_port or free_port(args.bind if args.bind not in ("0.0.0.0", "::")
+                                            else "127.0.0.1")
+    server = RerunWebServer(args.bind, args.web_port, grpc_port, sources=[str(out)])
+    server.start()
+    try:
+        address = (f"http://{url_host(args.bind)}:{server.web_port}/"
+                   f"?url={quote(server.grpc_url, safe=':/')}")
+        return _serve_until_interrupt(env, f"Rerun web viewer: {address}", server.stop)
+    finally:
+        server.stop()
 
 
 def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> int:
@@ -176,14 +201,20 @@ def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> i
     if not args.web:
         raise UsageError(f"{campaign_dir} is a campaign: it is shown in the browser",
                          f"rocas view --web {campaign_dir}")
-    server = CampaignServer(campaign_dir, port=args.page_port, web_viewer_port=args.web_port)
+    from rocas.viz.serve import bind_warning
+
+    server = CampaignServer(campaign_dir, port=args.page_port, web_viewer_port=args.web_port,
+                            host=args.bind)
+    warning = bind_warning(args.bind)
+    if warning:
+        env.warn(warning)
     server.start()
     return _serve_until_interrupt(env, f"Campaign view: {server.url}", server.stop)
 
 
 def _serve_until_interrupt(env: Env, where: str, stop: Callable[[], object]) -> int:
     """Say where the page is, then wait for Ctrl-C and ``stop`` the server (exit 0)."""
-    env.out().print(where)
+    env.out().print(safe(where), soft_wrap=True)
     env.out().print("Serving until Ctrl-C.")
     env.stdout.flush()
     try:

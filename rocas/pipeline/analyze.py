@@ -12,10 +12,12 @@ finished phase and generation without recomputing or losing anything. The report
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 from typing import Any
 
+from rocas._lock import locked_directory
 from rocas.pipeline.confidence import phase_confidence, start_second_opinion
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.cyber_phase import phase_cyber, start_screening
@@ -23,7 +25,15 @@ from rocas.pipeline.diff_phase import phase_diff
 from rocas.pipeline.physical_phase import phase_physical
 from rocas.pipeline.replay_phase import phase_replay
 from rocas.pipeline.report import build_report, write_report
-from rocas.pipeline.rundir import Progress, Run, noop, prepare_run_dir, remove_if_empty, source_identity
+from rocas.pipeline.rundir import (
+    Progress,
+    Run,
+    damaged,
+    noop,
+    prepare_run_dir,
+    remove_if_empty,
+    source_identity,
+)
 from rocas.pipeline.validation import phase_validation
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import Executor, make_executor
@@ -59,9 +69,24 @@ def analyze(
     made = [d for d in (out, *out.parents) if not d.exists()]
     state: dict[str, Any] = {"done": {}}
     try:
-        state = prepare_run_dir(out, resume, label, cfg, digest)
-        _warm_up(ex, cfg)
-        return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
+        with contextlib.ExitStack() as lock:
+            held = out.is_dir()
+            if held:  # before reading it: another process may be writing it
+                lock.enter_context(locked_directory(out))
+            state = prepare_run_dir(out, resume, label, cfg, digest)
+            if not held:  # made just now
+                lock.enter_context(locked_directory(out))
+            _warm_up(ex, cfg)
+            resumed = bool(state["done"])
+            try:
+                return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
+            except (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError) as exc:
+                if not resumed:
+                    raise
+                # a run directory is someone's data: what read_state and the phases' own
+                # checks let through is still damage, not a bug (the full story: --traceback)
+                raise damaged(out, "a file", f"holds values of the wrong shape "
+                                             f"({type(exc).__name__}: {exc})") from exc
     except BaseException:
         if own:  # an interruption or an error: end the workers without waiting for their tasks
             getattr(ex, "abort", ex.close)()

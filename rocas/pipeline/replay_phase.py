@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 
 from rocas._fs import write_text_atomic
-from rocas.errors import ScenarioError
+from rocas._limits import loads_json, read_text_limited
+from rocas.errors import InputError
 from rocas.pipeline.evaluate import Accident, VariantResult, VariantTask, evaluate, is_accident
 from rocas.pipeline.rundir import Run, damaged
 from rocas.scenarios.model import Scenario
@@ -23,11 +24,14 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
     ran: tuple[Any, np.ndarray, np.ndarray] | None = None  # (outcome, ego, actors) of the run
     if run.done("replay"):
         try:
-            run.scenario = scenario_from_dict(json.loads((run.out / "scenario.json").read_text()))
-        except OSError as exc:
-            raise damaged(run.out, "scenario.json", f"cannot be read ({exc.strerror or exc})") from None
-        except (ValueError, ScenarioError) as exc:  # JSONDecodeError and UnicodeDecodeError too
-            raise damaged(run.out, "scenario.json", f"is not a valid scenario ({exc})") from None
+            text = read_text_limited(run.out / "scenario.json", what="scenario")
+        except InputError as exc:
+            raise damaged(run.out, "scenario.json", f"cannot be read ({exc.message})") from None
+        try:  # bounded in size and depth: a run directory may come from someone else
+            run.scenario = scenario_from_dict(loads_json(text, origin="scenario.json"))
+        except (InputError, ValueError, TypeError, AttributeError) as exc:
+            why = exc.message if isinstance(exc, InputError) else exc
+            raise damaged(run.out, "scenario.json", f"is not a valid scenario ({why})") from None
     else:
         t0 = time.perf_counter()
         result: dict[str, Any] = {}

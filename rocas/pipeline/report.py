@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import write_text_atomic
+from rocas._text import markdown_text
 
 EXPLANATIONS = {
     "misconfiguration": (
@@ -302,54 +303,57 @@ def regression_text(validation: dict[str, Any]) -> str:
 
 
 def markdown(report: dict[str, Any]) -> str:
-    """The verdict as a markdown document (report.md, the Rerun verdict view)."""
-    lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", report["explanation"], ""]
+    """The verdict as a markdown document (report.md, the Rerun verdict view). Every text made
+    from data (names of modules, channels, entities, files) is escaped: no HTML or Markdown in a
+    name acts (:func:`rocas._text.markdown_text`)."""
+    md = markdown_text
+    lines = [f"# rocas analyze: {report['verdict'].replace('_', ' ')}", "", md(report["explanation"]), ""]
     if report.get("warnings"):
         lines[3:3] = ["**Computed from less than the whole recording:**", "",
-                      *(f"- {w}" for w in report["warnings"]), ""]
+                      *(f"- {md(w)}" for w in report["warnings"]), ""]
     if report.get("settings"):
-        lines.append(f"- **Settings**: {settings_text(report)}")
+        lines.append(f"- **Settings**: {md(settings_text(report))}")
     if report.get("replay"):
-        lines.append(f"- **Replay**: {replay_text(report)}")
+        lines.append(f"- **Replay**: {md(replay_text(report))}")
     if report["accident"]:
-        lines.append(f"- **Accident**: {accident_text(report['accident'])}")
+        lines.append(f"- **Accident**: {md(accident_text(report['accident']))}")
     trig = report["triggering_entity"]
     if trig:
         for p in trig["properties"]:
-            lines.append(f"- **Triggering entity**: {trig['entity']} ({trig['kind']}): "
-                         f"{change(p)}")
+            lines.append(f"- **Triggering entity**: {md(trig['entity'])} ({md(trig['kind'])}): "
+                         f"{md(change(p))}")
     if report["deviating_module"]:
-        lines.append(f"- **Deviating module**: {report['deviating_module']} "
-                     f"(walk: {' → '.join(report['path'])})")
+        lines.append(f"- **Deviating module**: {md(report['deviating_module'])} "
+                     f"(walk: {md(' → '.join(report['path']))})")
         if report.get("walk_fallback"):
-            lines.append(f"  - {report['walk_fallback']}.")
+            lines.append(f"  - {md(report['walk_fallback'])}.")
         if report.get("entries_passed"):
-            lines.append(f"  - {entries_passed_text(report)}.")
+            lines.append(f"  - {md(entries_passed_text(report))}.")
         if report.get("cleared_passed"):
-            lines.append(f"  - {cleared_passed_text(report)}.")
+            lines.append(f"  - {md(cleared_passed_text(report))}.")
         if report.get("window_passed"):
-            lines.append(f"  - {report['window_passed']}.")
+            lines.append(f"  - {md(report['window_passed'])}.")
         if report.get("walk_named"):
-            lines.append(f"  - {walk_named_text(report)}.")
+            lines.append(f"  - {md(walk_named_text(report))}.")
     if report.get("confidence"):
-        lines.append(f"- **Confidence**: {confidence_text(report)}")
+        lines.append(f"- **Confidence**: {md(confidence_text(report))}")
     for m in report["misconfiguration"]:
-        lines.append(f"- **Misconfiguration**: {change(m)}")
+        lines.append(f"- **Misconfiguration**: {md(change(m))}")
     for alt in report.get("alternatives", []):
         lines.append("- **Nearly as small a fix**: "
-                     + ", ".join(change(m) for m in alt["misconfiguration"]) + f" (h2 {alt['h2']:.4g})")
+                     + md(", ".join(change(m) for m in alt["misconfiguration"])) + f" (h2 {alt['h2']:.4g})")
     if report.get("other_fixes"):
-        lines.append("- **Larger fixes that also avoid it**: " + "; ".join(
-            other_fix_text(f) for f in report["other_fixes"]))
+        lines.append("- **Larger fixes that also avoid it**: " + md("; ".join(
+            other_fix_text(f) for f in report["other_fixes"])))
     v = report["validation"]
     if v and v["variants"]:
         lines.append(f"- **Validation** ({v['variants']} perturbed variants): accident-free "
                      f"{100 * v['success_rate_original']:.0f} % with the original configuration, "
                      f"{100 * v['success_rate_fixed']:.0f} % with the fix"
                      + (" — **the fix makes things worse**" if v["fix_makes_it_worse"] else "")
-                     + (f"; {regression_text(v)}" if regression_text(v) else ""))
-        lines.append(f"- **Robust value**: {robust_text(report)}"
-                     + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
+                     + (f"; {md(regression_text(v))}" if regression_text(v) else ""))
+        lines.append(f"- **Robust value**: {md(robust_text(report))}"
+                     + (f"; {md(sweep_text(v))}" if sweep_text(v) else ""))
     t = report["timings_s"]
     lines.append("- **Time**: " + ", ".join(f"{k} {s:.1f} s" for k, s in t.items()))
     lines.append("- **Simulations**: " + ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))

@@ -134,17 +134,79 @@ def damaged(out: Path, name: str, reason: str) -> InputError:
                       f"delete {out} to start again, or choose another --out")
 
 
+#: what the pipeline reads of each finished phase's stored result before anything else: the
+#: key, the types it may have, and whether it must be there (the rest is checked where it is
+#: read, and anything still wrong is damage too: rocas.pipeline.analyze)
+_PHASE_FIELDS: dict[str, tuple[tuple[str, tuple[type, ...], bool], ...]] = {
+    "replay": (("reproduced", (bool,), True), ("accident", (dict, type(None)), False)),
+    "physical": (("chosen", (dict,), False), ("evaluations", (int,), False)),
+    "diff": (("deviating_module", (str, type(None)), True), ("path", (list,), False),
+             ("control_channel", (str, type(None)), False)),
+    "confidence": (("level", (str, type(None)), False),),
+    "cyber": (("fix", (dict,), False), ("module", (str, type(None)), False)),
+    "validation": (),
+}
+
+
+def _state_problem(state: Any) -> str | None:
+    """What is wrong with a decoded state.json (None: nothing rocas relies on)."""
+    if not isinstance(state, dict):
+        return "is not a rocas run state (not a JSON object)"
+    for key in ("done", "config", "timings_s", "evaluations"):
+        if not isinstance(state.get(key), dict):
+            return f"is not a rocas run state ({key!r} is not an object)"
+    if not isinstance(state.get("source", ""), str) or not isinstance(state.get("source_sha256", ""), str):
+        return "is not a rocas run state ('source' is not text)"
+    unknown = sorted(set(state["done"]) - set(PHASES))
+    if unknown:
+        return f"is not a rocas run state (unknown phase {unknown[0]!r})"
+    for key, value in state["config"].items():
+        if not isinstance(value, bool | int | float | str | type(None)):
+            return f"has a setting {key!r} that is not a number or text"
+    for table in ("timings_s", "evaluations"):
+        for phase, value in state[table].items():
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                return f"has {table}[{phase!r}] that is not a number"
+    for phase, result in state["done"].items():
+        if not isinstance(result, dict):
+            return f"has a result of phase {phase!r} that is not an object"
+        for key, types, required in _PHASE_FIELDS.get(phase, ()):
+            if key not in result:
+                if required:
+                    return f"has a result of phase {phase!r} without {key!r}"
+                continue
+            value = result[key]
+            if not isinstance(value, types) or (bool not in types and isinstance(value, bool)):
+                return f"has a result of phase {phase!r} whose {key!r} has the wrong type"
+    cyber = state["done"].get("cyber", {})
+    fix = cyber.get("fix") if isinstance(cyber, dict) else None
+    if fix is not None and not all(isinstance(k, str) and isinstance(v, int | float)
+                                   and not isinstance(v, bool) for k, v in fix.items()):
+        return "has a fix that is not a mapping of parameter names to numbers"
+    return None
+
+
 def read_state(out: Path) -> dict[str, Any]:
+    """``out/state.json``, checked for what rocas relies on (types, known phases).
+
+    Raises:
+        InputError: it cannot be read, is not JSON, is too large or too deep, or is not a run
+            state (the run directory is damaged: exit 3).
+    """
+    from rocas._limits import loads_json, read_text_limited
+
+    path = out / "state.json"
     try:
-        state = json.loads((out / "state.json").read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise damaged(out, "state.json", f"cannot be read ({exc.strerror or exc})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise damaged(out, "state.json", f"is not valid JSON ({exc})") from None
-    if not (isinstance(state, dict)
-            and all(isinstance(state.get(k), dict) for k in ("done", "config", "timings_s", "evaluations"))
-            and set(state["done"]) <= set(PHASES)):
-        raise damaged(out, "state.json", "is not a rocas run state")
+        text = read_text_limited(path, what="run state")
+    except InputError as exc:
+        raise damaged(out, "state.json", f"cannot be read ({exc.message})") from None
+    try:
+        state = loads_json(text, origin="state.json")
+    except InputError as exc:
+        raise damaged(out, "state.json", f"is not valid JSON ({exc.message})") from None
+    problem = _state_problem(state)
+    if problem:
+        raise damaged(out, "state.json", problem)
     return state
 
 

@@ -122,8 +122,10 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     n = len(variants)
     stronger = stronger_fixes(fix, run.cyber_space(module)) if n else []
     configs = [params_tuple(values) for _, values in stronger]
-    found = _validation_checkpoint(run.out / "validation.ckpt", fix, n)
-    sims = _Simulations(run, found, planned=validation_simulations(n, len(stronger)))
+    planned = validation_simulations(n, len(stronger))
+    found = _validation_checkpoint(run.out / "validation.ckpt", fix, n, planned,
+                                   run.state.get("source_sha256"), run.cfg.seed)
+    sims = _Simulations(run, found, planned=planned)
     schedule = looks(n)
     original = [VariantTask(v, (), v.seed) for v in variants]
 
@@ -256,7 +258,9 @@ class _Simulations:
         step = run.cfg.batch_size * VALIDATION_SLICE_BATCHES * max(1, getattr(run.executor, "workers", 1))
         while self.done < first + len(tasks):
             if len(found["accident"]) > self.done:  # finished before an interruption
-                self.done = min(len(found["accident"]), first + len(tasks))
+                upto = min(len(found["accident"]), first + len(tasks))
+                self.spot_check(tasks, first, range(self.done, upto), h1_of)
+                self.done = upto
                 continue
             self.report()
             chunk = tasks[self.done - first:self.done - first + step]
@@ -273,6 +277,32 @@ class _Simulations:
         record(recordings)
         return found["accident"][first:first + len(tasks)]
 
+    def spot_check(self, tasks: list[VariantTask], first: int, taken: range, h1_of: range) -> None:
+        """Run again SPOT_CHECKS of the simulations a checkpoint says were done (chosen at
+        random where the checkpoint's writer cannot foresee it) and refuse the checkpoint as
+        damage if one comes out otherwise: the simulation is deterministic, so a checkpoint
+        rocas wrote always agrees, and one written to steer the verdict is caught with
+        probability 1 - (1 - share altered)^SPOT_CHECKS per wave."""
+        import random
+
+        from rocas.pipeline.rundir import damaged
+
+        if not taken:
+            return
+        picks = sorted(random.SystemRandom().sample(taken, min(SPOT_CHECKS, len(taken))))
+        run = self.run_
+        results = evaluate(run.executor, [tasks[i - first] for i in picks], run.cfg.batch_size)
+        for i, r in zip(picks, results, strict=True):
+            same = is_accident(r.outcome) == self.found["accident"][i]
+            if same and i - first in h1_of and str(i) in self.found["h1_m2"]:
+                assert run.original is not None
+                h1 = ego_dissimilarity(run.original.ego_xy, r.ego_xy, run.h1_horizon)
+                same = bool(np.isclose(h1, self.found["h1_m2"][str(i)], rtol=1e-9, atol=1e-12))
+            if not same:
+                raise damaged(run.out, "validation.ckpt",
+                              f"does not match the simulations it records (simulation {i} run "
+                              "again comes out otherwise)")
+
     def report(self) -> None:
         """Tell the progress callback how far the phase is (when that changed)."""
         if self._said == (self.planned, self.done):
@@ -282,21 +312,50 @@ class _Simulations:
                                           "simulations": self.planned, "evaluations": self.done})
 
 
-def _validation_checkpoint(path: Path, fix: Mapping[str, float], variants: int) -> dict[str, Any]:
+#: simulations of a resumed wave that are run again to check the checkpoint (see
+#: _Simulations.spot_check)
+SPOT_CHECKS = 4
+
+
+def _validation_checkpoint(path: Path, fix: Mapping[str, float], variants: int, planned: int,
+                           source_sha256: str | None = None, seed: int | None = None
+                           ) -> dict[str, Any]:
     """What the finished slices of phase V found, in task order (``accident``: one flag per
     simulation; ``h1_m2``: task index -> h1 of the stronger values' runs on the accident); empty
-    when there is no checkpoint, or one of another fix, size or format (then it is started
-    afresh: the order of the tasks follows from the results, so a prefix is all there is)."""
-    fresh = {"format": 3, "fix": dict(fix), "variants": variants, "accident": [], "h1_m2": {}}
+    when there is no checkpoint, or one of another fix, size, input, seed or format (then it is
+    started afresh: the order of the tasks follows from the results, so a prefix is all there
+    is).
+
+    Raises:
+        InputError: the checkpoint is of this validation but its content has the wrong types
+            or lengths (the run directory is damaged).
+    """
+    from rocas._limits import loads_json, read_text_limited
+    from rocas.errors import InputError
+    from rocas.pipeline.rundir import damaged
+
+    fresh = {"format": 4, "fix": dict(fix), "variants": variants, "source_sha256": source_sha256,
+             "seed": seed, "accident": [], "h1_m2": {}}
     if not path.exists():
         return fresh
     try:
-        saved = json.loads(path.read_text())
-    except (OSError, ValueError):
+        saved = loads_json(read_text_limited(path, what="checkpoint"), origin=path.name)
+    except InputError:
+        return fresh  # a write cut short: its slices are run again
+    identity = ("format", "fix", "variants", "source_sha256", "seed")
+    if not isinstance(saved, dict) or any(saved.get(k) != fresh[k] for k in identity):
         return fresh
-    if not isinstance(saved, dict) or any(saved.get(k) != fresh[k] for k in ("format", "fix", "variants")):
-        return fresh
-    return saved
+    accident, h1 = saved.get("accident"), saved.get("h1_m2")
+    if not (isinstance(accident, list) and all(isinstance(a, bool) for a in accident)
+            and len(accident) <= planned):
+        raise damaged(path.parent, path.name, f"does not hold at most {planned} accident flags")
+    if not (isinstance(h1, dict) and all(
+            isinstance(k, str) and k.isdigit() and int(k) < len(accident)
+            and isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
+            for k, v in h1.items())):
+        raise damaged(path.parent, path.name, "holds h1 values that are not finite numbers of "
+                                              "simulations it records")
+    return {**fresh, "accident": accident, "h1_m2": h1}
 
 
 def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: float

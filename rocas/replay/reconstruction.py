@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from rocas.errors import RecordingError, ScenarioError, UsageError
+from rocas._limits import MAX_DEPTH, check_depth
+from rocas.errors import InputError, RecordingError, ScenarioError, UsageError
 from rocas.replay.lanes import project
 from rocas.replay.paths import actor_from_track
 from rocas.replay.source import RecordedRun, read_recording
@@ -100,11 +101,22 @@ def _ego_from_meta(meta: dict[str, str]) -> dict[str, Any]:
             "start_s_m": float(meta["start_s_m"]),
             "start_lateral_m": float(meta.get("start_lateral_m") or 0.0),
             "start_speed_mps": float(meta.get("start_speed_mps") or 0.0)}
+        if not isinstance(ego, dict):
+            raise ValueError("not a JSON object")
         if meta.get("destination_s_m"):
             ego["destination_s_m"] = float(meta["destination_s_m"])
         flat = json.loads(meta["params"]) if meta.get("params") else None
+        check_depth(ego, origin="rocas.ego metadata")
+        check_depth(flat, origin="rocas.run params")
+        if flat is not None and not isinstance(flat, dict):
+            raise ValueError("params: not a JSON object")
     except (KeyError, ValueError) as exc:
         raise RecordingError(f"rocas.ego metadata is malformed ({exc})") from exc
+    except RecursionError:
+        raise RecordingError(f"rocas.ego metadata is malformed (nested more than {MAX_DEPTH} "
+                             "levels deep)") from None
+    except InputError as exc:
+        raise RecordingError(f"rocas.ego metadata is malformed ({exc.message})") from None
     if flat is not None:  # the overrides in force in the recorded run (scenario's + --set)
         nested: dict[str, dict[str, float]] = {}
         for name, value in flat.items():

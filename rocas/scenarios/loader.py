@@ -425,15 +425,24 @@ def scenario_from_dict(data: Mapping[str, Any], source: str = "<scenario>", *,
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file (a catalog file's ``[ground_truth]`` table is
     left out)."""
+    from rocas._limits import MAX_DEPTH, check_depth, read_text_limited
+    from rocas.errors import InputError
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"{p}: cannot read scenario file: {exc.strerror or exc}") from None
+    try:  # bounded: a scenario may come from someone else (or be /dev/zero)
+        text = read_text_limited(p, what="scenario file")
+    except InputError as exc:
+        raise ScenarioError(exc.message, exc.hint) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{p}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ScenarioError(f"{p}: nested more than {MAX_DEPTH} levels deep") from None
+    try:
+        check_depth(data, origin=str(p))
+    except InputError as exc:
+        raise ScenarioError(exc.message, exc.hint) from None
     # a catalog entry is a scenario file plus the known answer, which is no part of the
     # scenario (rocas.scenarios.catalog reads and checks it)
     if isinstance(data.get("ground_truth"), dict):

@@ -234,13 +234,16 @@ def _load_checkpoint(ckpt: Path, space: MutationSpace, cfg: SearchConfig
             overwritten, or written by an incompatible version), or belongs to another search.
     """
     hint = f"delete {ckpt} to restart this search from its first generation"
+    from rocas._limits import loads_json, read_bytes_limited
+
+    try:  # bounded in size and depth: a run directory may come from someone else
+        data = read_bytes_limited(ckpt, what="search checkpoint")
+    except InputError as exc:
+        raise InputError(f"cannot read search checkpoint {ckpt}: {exc.message}", hint) from None
     try:
-        with open(ckpt, encoding="utf-8") as f:
-            doc = json.load(f)
-    except OSError as exc:
-        raise InputError(f"cannot read search checkpoint {ckpt}: {exc.strerror or exc}", hint) from None
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise InputError(f"search checkpoint {ckpt} is damaged (not JSON: {exc})", hint) from None
+        doc = loads_json(data, origin=str(ckpt))
+    except InputError as exc:
+        raise InputError(f"search checkpoint {ckpt} is damaged (not JSON: {exc.message})", hint) from None
     if not isinstance(doc, dict) or doc.get("format") != CHECKPOINT_FORMAT:
         raise InputError(f"search checkpoint {ckpt} does not hold a search state", hint)
     if doc.get("version") != CHECKPOINT_VERSION:

@@ -35,7 +35,6 @@ import os
 import shutil
 import subprocess
 import tempfile
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,11 +98,15 @@ class ExternalStack:
     @classmethod
     def from_file(cls, path: str | os.PathLike[str], cache_dir: str | os.PathLike[str]
                   ) -> ExternalStack:
+        from rocas._limits import load_toml_file
+        from rocas.errors import InputError
+
         path = Path(path)
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise UsageError(f"{path}: cannot read the stack file ({exc})") from None
+            data = load_toml_file(path, what="stack file")
+        except InputError as exc:
+            raise UsageError(f"cannot read the stack file: {exc.message}",
+                             exc.hint or "check --stack-file") from None
         command = data.get("command")
         if not (isinstance(command, list) and command and all(isinstance(c, str)
                                                                for c in command)):
@@ -112,7 +115,12 @@ class ExternalStack:
         params = data.get("parameters", {})
         if isinstance(params, str):
             params_path = path.parent / params
-            params = tomllib.loads(params_path.read_text(encoding="utf-8"))
+            try:
+                params = load_toml_file(params_path, what="parameters file")
+            except InputError as exc:
+                raise UsageError(f"{path}: its parameters file cannot be read: {exc.message}",
+                                 f"'parameters' names a TOML file beside the stack file, "
+                                 f"here {params_path}") from None
         stack = data.get("stack")
         if stack is not None and not isinstance(stack, str):
             raise UsageError(f"{path}: 'stack' must be a stack name", 'stack = "lav"')

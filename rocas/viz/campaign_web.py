@@ -1,6 +1,7 @@
 """``rocas view --web CAMPAIGN_DIR``: the browser view of a campaign (the page in ``viewer/``).
 
-One HTTP server on localhost serves, all from one origin:
+One HTTP server, on 127.0.0.1 unless the user names an address (``rocas view --bind``), serves,
+all from one origin:
 
 - ``/``, ``/app.js``, ``/style.css``: the static page of the repository's ``viewer/`` folder
   (:func:`viewer_dir`);
@@ -8,16 +9,25 @@ One HTTP server on localhost serves, all from one origin:
 - ``/rrd/<accident>.rrd``: the accident's analysis as a Rerun recording, written on its first
   request into ``CAMPAIGN_DIR/rrd/`` (:func:`rocas.viz.analysis.write_run_dir_rrd`) and kept;
 - ``/rerun/...``: Rerun's web viewer, the one rerun-sdk ships (so always the version of the
-  installed rerun-sdk, 0.41), passed through from :func:`rerun.serve_web_viewer`; its page's
-  links to web fonts are left out, so it loads with no network.
+  installed rerun-sdk, 0.41), passed through from a ``rerun --serve-web`` process on
+  127.0.0.1 (:class:`rocas.viz.serve.RerunWebServer`); its page's links to web fonts are left
+  out, so it loads with no network.
 
 The page loads ``/rerun/?url=<origin>/rrd/<accident>.rrd`` in a frame for the selected accident.
+
+A campaign folder is someone else's data: only accidents its ``campaign.json`` lists are served,
+and only when the name is one harmless path component whose run directory lies inside the
+folder (:func:`rocas._fs.safe_component`, :func:`rocas._fs.inside`). A request whose ``Host``
+is a name other than ``localhost`` is refused (421): a web page elsewhere cannot reach the server
+by pointing its own name at 127.0.0.1 (DNS rebinding).
 """
 
 from __future__ import annotations
 
+import ipaddress
 import json
 import re
+import socket
 import threading
 import urllib.error
 import urllib.request
@@ -26,6 +36,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
+from rocas._fs import inside, is_safe_component
 from rocas.errors import InputError, RocasError
 
 _PAGE_FILES = {"/": "index.html", "/index.html": "index.html", "/app.js": "app.js",
@@ -50,13 +61,35 @@ def viewer_dir() -> Path:
 
 
 def read_campaign(campaign_dir: Path) -> dict[str, Any]:
+    from rocas._limits import load_json_file
+
     path = campaign_dir / "campaign.json"
+    if not path.exists():
+        raise InputError(f"{campaign_dir}: no campaign.json", "run rocas triage first")
+    campaign = load_json_file(path, what="campaign")
+    if not isinstance(campaign, dict):
+        raise InputError(f"{path}: cannot read the campaign: not a JSON object",
+                         "run rocas triage again")
+    return campaign
+
+
+def host_allowed(host_header: str | None) -> bool:
+    """Whether a request's ``Host`` may be served: an IP address or ``localhost`` (with any
+    port). A DNS name pointed at this machine by someone else's page is refused."""
+    if not host_header:
+        return False
+    host = host_header.strip()
+    if host.startswith("["):  # [v6]:port
+        host = host[1:host.find("]")] if "]" in host else host
+    elif host.count(":") == 1:
+        host = host.rsplit(":", 1)[0]
+    if host.lower() == "localhost":
+        return True
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{campaign_dir}: no campaign.json", "run rocas triage first") from None
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read the campaign: {exc}") from None
+        ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return True
 
 
 class CampaignServer:
@@ -67,23 +100,29 @@ class CampaignServer:
         url: the page's address once started.
     """
 
-    def __init__(self, campaign_dir: str | Path, port: int = 8080, web_viewer_port: int = 9090) -> None:
+    def __init__(self, campaign_dir: str | Path, port: int = 8080, web_viewer_port: int = 9090,
+                 host: str = "127.0.0.1") -> None:
         self.campaign_dir = Path(campaign_dir)
         self.campaign = read_campaign(self.campaign_dir)
         self.page = viewer_dir()
+        self.host = host
         self.port = port
         self.web_viewer_port = web_viewer_port
         self._httpd: ThreadingHTTPServer | None = None
+        self._viewer: Any = None
         self._lock = threading.Lock()  # one .rrd written at a time
 
     @property
     def url(self) -> str:
-        return f"http://127.0.0.1:{self.port}/"
+        from rocas.viz.serve import url_host
+
+        return f"http://{url_host(self.host)}:{self.port}/"
 
     def start(self) -> None:
-        import rerun as rr
+        """Listen on :attr:`host` and start Rerun's web viewer on 127.0.0.1 (only this server
+        reaches it). A port in use is an :class:`~rocas.errors.OutputError` in one line."""
+        from rocas.viz.serve import LOOPBACK, RerunWebServer, port_error
 
-        rr.serve_web_viewer(web_port=self.web_viewer_port, open_browser=False)
         server = self
 
         class Handler(BaseHTTPRequestHandler):
@@ -93,8 +132,25 @@ class CampaignServer:
             def log_message(self, format: str, *args: Any) -> None:  # noqa: A002
                 pass
 
-        self._httpd = ThreadingHTTPServer(("127.0.0.1", self.port), Handler)
+        class Server(ThreadingHTTPServer):
+            address_family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
+            daemon_threads = True
+
+        try:
+            self._httpd = Server((self.host, self.port), Handler)
+        except OSError as exc:
+            raise port_error(self.host, self.port, "--page-port", exc) from None
         self.port = self._httpd.server_address[1]
+        # the web viewer is given the page's address as its source: it then serves the viewer
+        # alone, with no gRPC proxy of its own
+        self._viewer = RerunWebServer(LOOPBACK, self.web_viewer_port, sources=[self.url])
+        try:
+            self._viewer.start()
+        except BaseException:
+            self._httpd.server_close()
+            self._httpd = None
+            raise
+        self.web_viewer_port = self._viewer.web_port
         threading.Thread(target=self._httpd.serve_forever, daemon=True).start()
 
     def stop(self) -> None:
@@ -102,10 +158,16 @@ class CampaignServer:
             self._httpd.shutdown()
             self._httpd.server_close()
             self._httpd = None
+        if self._viewer is not None:
+            self._viewer.stop()
+            self._viewer = None
 
     # --- requests -----------------------------------------------------------------------------
 
     def _get(self, h: BaseHTTPRequestHandler) -> None:
+        if not host_allowed(h.headers.get("Host")):
+            return _send(h, b"unknown host: open the page at the address rocas printed",
+                         "text/plain", HTTPStatus.MISDIRECTED_REQUEST)
         path = h.path.split("?", 1)[0]
         if path in _PAGE_FILES:
             f = self.page / _PAGE_FILES[path]
@@ -119,17 +181,29 @@ class CampaignServer:
         _send(h, b"not found", "text/plain", HTTPStatus.NOT_FOUND)
 
     def _rrd(self, h: BaseHTTPRequestHandler, name: str) -> None:
-        names = {a["name"] for a in self.campaign.get("accidents", [])}
-        if name not in names:
-            return _send(h, f"no analysed accident {name!r}".encode(), "text/plain", HTTPStatus.NOT_FOUND)
-        out = self.campaign_dir / "rrd" / f"{name}.rrd"
-        with self._lock:
-            if not out.exists():
-                from rocas.viz.analysis import write_run_dir_rrd
+        names = {a.get("name") for a in self.campaign.get("accidents", []) if isinstance(a, dict)}
+        if name not in names or not is_safe_component(name):
+            return _send(h, b"no such analysed accident", "text/plain", HTTPStatus.NOT_FOUND)
+        try:
+            run_dir = inside(self.campaign_dir, "runs", name)
+            out = inside(self.campaign_dir, "rrd", f"{name}.rrd")
+            with self._lock:
+                if not out.exists():
+                    from rocas.viz.analysis import write_run_dir_rrd
 
-                out.parent.mkdir(exist_ok=True)
-                write_run_dir_rrd(out, self.campaign_dir / "runs" / name)
-        _send(h, out.read_bytes(), "application/octet-stream")
+                    if not run_dir.is_dir():
+                        return _send(h, b"the accident's run directory is missing", "text/plain",
+                                     HTTPStatus.NOT_FOUND)
+                    out.parent.mkdir(exist_ok=True)
+                    inside(self.campaign_dir, "rrd")  # rrd/ itself is no link out
+                    write_run_dir_rrd(out, run_dir)
+                body = out.read_bytes()
+        except RocasError as exc:
+            return _send(h, str(exc).encode(), "text/plain", HTTPStatus.NOT_FOUND)
+        except OSError as exc:
+            return _send(h, f"cannot write the recording: {exc.strerror or exc}".encode(),
+                         "text/plain", HTTPStatus.INTERNAL_SERVER_ERROR)
+        _send(h, body, "application/octet-stream")
 
     def _rerun(self, h: BaseHTTPRequestHandler, rest: str) -> None:
         try:
@@ -140,6 +214,9 @@ class CampaignServer:
                          if k.lower() in ("content-encoding", "rerun-final-length")}
         except urllib.error.HTTPError as exc:
             return _send(h, exc.read(), "text/plain", HTTPStatus(exc.code))
+        except (urllib.error.URLError, OSError):
+            return _send(h, b"Rerun's web viewer does not answer", "text/plain",
+                         HTTPStatus.BAD_GATEWAY)
         if rest.split("?", 1)[0] in ("/", "/index.html"):
             body = _WEB_FONTS.sub(b"", body)
         _send(h, body, ctype, extra=extra)

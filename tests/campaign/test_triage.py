@@ -61,3 +61,31 @@ def test_a_recording_beside_its_ground_truth_is_one_accident(tmp_path):
     items = collect_inputs([str(tmp_path)])
     assert [(i.name, i.kind, i.truth_type) for i in items] == [("x", "recording", "A3"),
                                                                  ("y", "scenario", None)]
+
+
+def test_hostile_names_in_a_campaign_are_escaped_in_its_page_and_tables(small_campaign):
+    """campaign.md embeds no HTML or Markdown from names, and the terminal tables print them as
+    they read (they ended the table with a markup error)."""
+    import io
+
+    from hostile import MARKUP, SPOOF
+
+    from rocas.campaign.triage import markdown
+    from rocas.cli.console import Env
+    from rocas.cli.triage import render
+
+    out, c = small_campaign
+    c = json.loads(json.dumps(c))
+    evil = "<img src=x onerror=alert(1)>|" + MARKUP
+    c["accidents"][0]["name"] = evil
+    c["accidents"][0]["deviating_module"] = SPOOF
+    c["groups"][0]["root_cause"] = evil
+    c["failed"][0]["name"] = "`code` <script>"
+    md = markdown(c)
+    assert "<img" not in md and "<script>" not in md and "&lt;img src=x onerror=alert(1)&gt;" in md
+    assert "\\|" in md and "\x1b" not in md and "\r" not in md
+    stdout = io.StringIO()
+    render(c, out, Env(stdout=stdout, stderr=io.StringIO()))
+    text = stdout.getvalue()
+    assert MARKUP in text.replace("\n", "") or "fore[/]" in text
+    assert "\x1b" not in text and "\r" not in text

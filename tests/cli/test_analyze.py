@@ -279,3 +279,61 @@ def test_analyze_joins_the_ray_cluster_at_address(rocas, monkeypatch, tmp_path):
     r = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", tmp_path / "r",
               "--address", "head.example:6379")
     assert r.code == 2 and "--address is for --executor ray" in r.stderr
+
+
+@pytest.mark.parametrize("hostile", ["../../escaped", "/tmp/rocas-abs-escape", "..", "a/../../b"])
+def test_a_scenario_name_is_never_a_path(rocas, monkeypatch, tmp_path, hostile):
+    import importlib
+    from pathlib import Path
+
+    from rocas.errors import InputError
+
+    pipeline = importlib.import_module("rocas.pipeline.analyze")
+    src = Path(importlib.import_module("rocas.scenarios").__file__).parent / "examples" / \
+        "roundabout_red_truck.toml"
+    text = src.read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("name = "))
+    scenario = tmp_path / "hostile.toml"
+    scenario.write_text(text.replace(line, f"name = {json.dumps(hostile)}", 1))
+    seen = []
+
+    def stop(run, *args, **kwargs):
+        seen.append(run.out)
+        raise InputError("stopped here")
+
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    monkeypatch.setattr(pipeline, "phase_replay", stop)
+    res = rocas("analyze", scenario, "--scenario", *SMALL)
+    assert res.code == 3 and "stopped here" in res.stderr
+    (out,) = seen
+    assert out.parent == Path("runs") and len(out.parts) == 2
+    assert not out.is_absolute() and ".." not in out.name and "/" not in out.name
+    assert not Path("/tmp/rocas-abs-escape").exists() and not (tmp_path / "escaped").exists()
+
+
+def test_two_analyses_of_one_run_directory_at_once_are_refused(rocas, tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    run = tmp_path / "run"
+    run.mkdir()
+    root = Path(__file__).resolve().parents[2]
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time\nfrom rocas._lock import locked_directory\n"
+         "with locked_directory(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(60)",
+         str(run)], stdout=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": str(root)})
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        res = rocas("analyze", "roundabout_red_truck", "--scenario", "--out", run, *SMALL)
+    finally:
+        holder.kill()
+        holder.wait()
+    assert res.code == 2
+    assert res.stderr.strip().splitlines() == [
+        f"rocas: error: run directory {run} is in use by process {holder.pid} (wait for it to "
+        "finish, or choose another --out)"]
+    assert list(run.iterdir()) == []

@@ -126,7 +126,7 @@ def test_a_truncated_recording_is_reported_on_stderr(tmp_path):
     [
         (["cmg", "{tmp}/nope.mcap"], "no such file"),
         (["cmg", "{rec}", "--cmg", "{tmp}/bad.json"], "not valid JSON"),
-        (["cmg", "{rec}", "--cmg", "{tmp}/nope.json"], "no such CMG file"),
+        (["cmg", "{rec}", "--cmg", "{tmp}/nope.json"], "cannot read CMG file"),
         (["cmg", "{rec}", "--control-channel", "/nope"], "'/nope' (from --control-channel)"),
     ],
 )

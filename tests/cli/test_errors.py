@@ -193,3 +193,52 @@ def test_a_missing_output_folder_exits_5_and_is_not_created(rocas, red_truck_rec
     assert res.code == 5, res.stderr
     assert "does not exist" in res.stderr and "mkdir -p" in res.stderr
     assert not (tmp_path / "nonexistent").exists()
+
+
+def test_a_reader_that_stops_ends_rocas_quietly(rocas):
+    """``rocas params --json | head``: a closed stdout is no error (exit 0, nothing on stderr)."""
+    import io
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from rocas.cli.console import Env
+    from rocas.cli.main import main
+
+    class Closed(io.StringIO):
+        def write(self, s):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    err = io.StringIO()
+    assert main(["params", "--json"], env=Env(stdout=Closed(), stderr=err)) == 0
+    assert err.getvalue() == ""
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    for args in (["params", "--json"], ["catalog", "list", "--json"]):
+        proc = subprocess.Popen([sys.executable, "-m", "rocas", *args], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, env=env, cwd=root)
+        proc.stdout.close()  # the reader is gone before rocas writes
+        assert proc.wait(timeout=60) == 0
+        assert proc.stderr.read() == b""
+        proc.stderr.close()
+
+
+def test_devices_and_huge_inputs_are_refused_in_one_line(rocas, tmp_path):
+    from rocas._limits import MAX_INPUT_BYTES
+
+    for args in (["simulate", "/dev/zero", "-o", tmp_path / "x.mcap"],
+                 ["cmg", "/dev/null", "--cmg", "/dev/zero"]):
+        res = rocas(*args)
+        assert res.code == 3, res.stderr
+        (line,) = res.stderr.strip().splitlines()
+        assert line.startswith("rocas: error: /dev/zero: larger than "
+                               f"{MAX_INPUT_BYTES // 2**20} MB, too large for a ")
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100000 + "]" * 100000)
+    res = rocas("cmg", "/dev/null", "--cmg", deep)
+    assert res.code == 3 and "nested more than 64 levels deep" in res.stderr
+    assert "internal error" not in res.stderr

@@ -110,3 +110,68 @@ def test_native_view_reports_a_viewer_that_fails(rocas, red_truck_recording, mon
     res = rocas("view", red_truck_recording, "--rrd", tmp_path / "v.rrd")
     assert res.code != 0 and "exited at once with status 1: Error: no GPU adapter" in res.stderr
     assert "Opened" not in res.stdout and "Started" not in res.stdout
+
+
+def _serve_view(args, env=None):
+    """Start ``rocas view ...`` serving; return the process and its first line of output."""
+    import os
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
+               **(env or {}))
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.Popen([sys.executable, "-m", "rocas", "view", *map(str, args)], cwd=root,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    return proc, line
+
+
+def test_view_web_serves_on_loopback_only(red_truck_recording):
+    import signal
+
+    from test_serve import listening, on_loopback
+
+    proc, line = _serve_view([red_truck_recording, "--web", "--web-port", "0", "--grpc-port", "0"])
+    try:
+        assert line.startswith("Rerun web viewer: http://127.0.0.1:"), (line, proc.stderr.read())
+        assert "?url=rerun%2Bhttp://127.0.0.1:" in line
+        found = listening(proc.pid)
+        assert len(found) >= 2 and all(on_loopback(ip) for ip, _ in found), found
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err and "warning" not in err
+
+
+def test_view_bind_elsewhere_warns_and_a_name_is_refused(rocas, red_truck_recording, tmp_path):
+    import socket
+
+    res = rocas("view", red_truck_recording, "--web", "--bind", "evil.example")
+    assert res.code == 2 and "not an IP address" in res.stderr
+    res = rocas("view", red_truck_recording, "--web", "--web-port", "70000")
+    assert res.code == 2 and "not a port" in res.stderr
+    with socket.socket() as s:  # bound, never listening: the server stops at its port check
+        s.bind(("0.0.0.0", 0))
+        port = s.getsockname()[1]
+        res = rocas("view", red_truck_recording, "--web", "--bind", "0.0.0.0", "--web-port", port)
+    assert res.code == 5
+    assert res.stderr.startswith("rocas: warning: serving on 0.0.0.0: anyone who can reach this "
+                                 "machine")
+
+
+def test_view_web_port_in_use_is_one_line(rocas, red_truck_recording):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        res = rocas("view", red_truck_recording, "--web", "--web-port", port, "--grpc-port", "0")
+    assert res.code == 5, res.stderr
+    assert res.stderr.strip().splitlines() == [
+        f"rocas: error: cannot listen on 127.0.0.1:{port}: already in use (choose another port "
+        "with --web-port, or stop what listens there)"]

@@ -330,3 +330,28 @@ def test_another_seed_gives_the_same_report_when_the_screenings_decide(red_truck
     # where its sweep is settled
     searches = lambda r: {k: n for k, n in r["evaluations"].items() if k != "validation"}  # noqa: E731
     assert searches(other) == searches(report)
+
+
+def test_the_report_prints_hostile_names_literally(serial_run):
+    """A module, a topic and a parameter named like markup or a terminal escape print as they
+    read in rocas analyze's report (they ended it with an internal error after the analysis)."""
+    import io
+
+    from hostile import MARKUP, SPOOF, TOPIC
+
+    from rocas._text import printable
+    from rocas.cli.analyze import render
+    from rocas.cli.console import Env
+
+    out, report = serial_run
+    hostile = json.loads(json.dumps(report))
+    hostile["deviating_module"] = SPOOF
+    hostile["path"] = [TOPIC, MARKUP, SPOOF]
+    hostile["explanation"] = f"{hostile['explanation']} {MARKUP} {SPOOF}"
+    hostile["warnings"] = [f"channel {TOPIC} [bold]"]
+    stdout = io.StringIO()
+    render(hostile, out, Env(stdout=stdout, stderr=io.StringIO()))
+    text = stdout.getvalue()
+    assert "\x1b" not in text and "\r" not in text
+    assert f"{printable(SPOOF)}   walk: {printable(TOPIC)} -> {MARKUP}" in text
+    assert f"channel {printable(TOPIC)} [bold]" in text

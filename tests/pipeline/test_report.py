@@ -149,3 +149,16 @@ def test_larger_fixes_that_also_avoid_the_accident_are_listed_after_the_chosen_o
     del state["done"]["cyber"]["other_fixes"]
     report = build_report(state, None, "misconfiguration")
     assert report["other_fixes"] == [] and "Larger fixes" not in markdown(report)
+
+
+def test_names_in_report_md_are_never_html_or_markdown():
+    from hostile import MARKUP, SPOOF
+
+    state = _state({"source": "scenario", "reproduced": True, "accident": None,
+                    "recorded_accident": None, "ego_rmse_m": 0.0})
+    state["done"] |= {"diff": {"deviating_module": "<img src=x onerror=alert(1)>",
+                               "path": ["/control", SPOOF, MARKUP]},
+                      "cyber": {"scope": "module", "parameters": 1, "misconfiguration": []}}
+    md = markdown(build_report(state, None, "no_configuration_fix"))
+    assert "<img" not in md and "&lt;img src=x onerror=alert(1)&gt;" in md
+    assert "\x1b" not in md and "\r" not in md and "fore\\[/\\]caster\\[bold\\]" in md

@@ -114,6 +114,18 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
     assert counts == [0, 8, 16]
     assert len(json.loads((out / "validation.ckpt").read_text())["accident"]) == 16
 
+    # a checkpoint altered to steer the verdict (every flag flipped) is caught by running
+    # some of its simulations again: damage, not a result
+    from rocas.errors import InputError
+
+    crafted = tmp_path / "crafted"
+    shutil.copytree(out, crafted)
+    ckpt = json.loads((crafted / "validation.ckpt").read_text())
+    ckpt["accident"] = [not a for a in ckpt["accident"]]
+    (crafted / "validation.ckpt").write_text(json.dumps(ckpt))
+    with pytest.raises(InputError, match="validation.ckpt does not match the simulations"):
+        analyze(red_truck, crafted, cfg, executor=SerialExecutor(), resume=True)
+
     # the same run without the interruption: phases I-IV as they were, the validation whole
     whole_dir = tmp_path / "whole"
     shutil.copytree(out, whole_dir)
@@ -190,3 +202,28 @@ def test_the_sweep_is_settled_by_a_minimal_fix_that_cannot_be_beaten_by_the_tole
     # 0.96 is within 0.05 of any rate; 0.85 falls short of 0.96 by more: 0.25 is the robust one
     assert sweep_settled(0.625, [0.85, 0.96])
     assert not sweep_settled(0.625, [0.85, 0.93])  # a later 1.0 would rule out 0.93
+
+
+def test_a_validation_checkpoint_is_checked_before_it_is_used(tmp_path):
+    from rocas.errors import InputError
+    from rocas.pipeline.validation import _validation_checkpoint
+
+    path = tmp_path / "validation.ckpt"
+    fix = {"perception.x": 1.0}
+    ident = {"format": 4, "fix": fix, "variants": 2, "source_sha256": "abc", "seed": 1}
+
+    def load(**content):
+        path.write_text(json.dumps({**ident, "accident": [], "h1_m2": {}, **content}))
+        return _validation_checkpoint(path, fix, 2, planned=9, source_sha256="abc", seed=1)
+
+    assert load(accident=[True, False], h1_m2={"0": 0.5})["accident"] == [True, False]
+    # of another input, seed or fix: not this validation's, so started afresh
+    assert load(source_sha256="other", accident=[True])["accident"] == []
+    assert load(seed=2, accident=[True])["accident"] == []
+    for bad in ({"accident": [1, 0]}, {"accident": "yes"}, {"accident": [False] * 10},
+                {"accident": [True], "h1_m2": {"0": "x"}}, {"accident": [True], "h1_m2": {"5": 1.0}},
+                {"accident": [True], "h1_m2": []}):
+        with pytest.raises(InputError, match="run directory .* is damaged: validation.ckpt"):
+            load(**bad)
+    path.write_text("[" * 50000)  # a write cut short or worse: the slices are run again
+    assert _validation_checkpoint(path, fix, 2, planned=9)["accident"] == []

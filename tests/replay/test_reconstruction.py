@@ -201,3 +201,14 @@ def test_a_recorded_mission_that_misses_the_first_pose_is_a_warning(tmp_path):
     (line,) = got.warnings
     assert "rocas.ego record" in line and "m/s from the first recorded pose" in line
     assert got.notes[0] == line
+
+
+def test_deeply_nested_or_misshapen_ego_metadata_is_a_recording_error():
+    from rocas.errors import RecordingError
+    from rocas.replay.reconstruction import _ego_from_meta
+
+    for ego in ("[" * 100000 + "]" * 100000, "[" * 80 + "]" * 80, "[1, 2]", "3"):
+        with pytest.raises(RecordingError, match="rocas.ego metadata is malformed"):
+            _ego_from_meta({"ego": ego})
+    with pytest.raises(RecordingError, match="rocas.ego metadata is malformed"):
+        _ego_from_meta({"ego": '{"route": []}', "params": "[1]"})

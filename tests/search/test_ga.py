@@ -210,3 +210,14 @@ def test_a_contiguous_shrink_stops_at_the_first_value_that_fails():
     assert jumped.values["truck.speed"] == pytest.approx(10.75)
     assert stayed.values["truck.speed"] == pytest.approx(5.75)
     assert rounds == [stayed]
+
+
+def test_a_deep_or_huge_checkpoint_is_damage_not_a_crash(tmp_path):
+    ckpt = tmp_path / "search.ckpt"
+    ckpt.write_text("[" * 100000 + "]" * 100000)
+    with pytest.raises(InputError, match="damaged .*nested more than 64 levels"):
+        _search(SerialExecutor(), checkpoint=ckpt)
+    ckpt.unlink()
+    ckpt.symlink_to("/dev/zero")
+    with pytest.raises(InputError, match="cannot read search checkpoint .*too large"):
+        _search(SerialExecutor(), checkpoint=ckpt)

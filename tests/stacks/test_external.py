@@ -106,3 +106,21 @@ def test_analyze_refuses_a_stack_file_for_another_stack(rocas, tmp_path):
     r = rocas("analyze", rec, "--out", tmp_path / "run", "--stack-file", other)
     assert r.code != 0 and "simulates stack 'ads', the accident's is 'lav'" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def test_a_stack_file_whose_parameters_file_is_missing_or_not_toml_is_one_line(tmp_path):
+    stack = tmp_path / "stack.toml"
+    stack.write_text('command = ["sim"]\nparameters = "params.toml"\n')
+    with pytest.raises(UsageError, match="its parameters file cannot be read: cannot read "
+                                         "parameters file .*params.toml: no such"):
+        ExternalStack.from_file(stack, tmp_path / "cache")
+    (tmp_path / "params.toml").write_text("this is = not [toml")
+    with pytest.raises(UsageError, match="its parameters file cannot be read: .*not valid TOML"):
+        ExternalStack.from_file(stack, tmp_path / "cache")
+    (tmp_path / "params.toml").unlink()
+    (tmp_path / "params.toml").symlink_to("/dev/zero")
+    with pytest.raises(UsageError, match="too large for a parameters file"):
+        ExternalStack.from_file(stack, tmp_path / "cache")
+    stack.write_text("[" * 2000)
+    with pytest.raises(UsageError, match="cannot read the stack file"):
+        ExternalStack.from_file(stack, tmp_path / "cache")
