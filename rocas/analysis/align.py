@@ -75,8 +75,10 @@ class Alignment:
             TOPIC".
         offset_s: added to the reference's log times [s].
         matches: content matches that agree with the offset (0 unless method is content).
-        channel_offsets_s: topic -> the offset used for that topic instead [s] (channels on
-            another clock).
+        channel_shifts_s: (side, topic) -> added to that recording's log times of that
+            topic, before the offset [s]: a channel on another clock than the rest of its
+            file (its identical messages agree on another offset; the file where the channel
+            starts later after its first message is the one corrected).
         origin_ns: t = 0 of the comparison, on the accident's clock [ns]: the later of the
             two files' first messages.
         starts_s: (accident, reference) first message of each file [s relative to t = 0].
@@ -89,7 +91,7 @@ class Alignment:
     method: str
     offset_s: float
     matches: int
-    channel_offsets_s: dict[str, float]
+    channel_shifts_s: dict[tuple[int, str], float]
     origin_ns: int
     starts_s: tuple[float, float]
     flushed: tuple[tuple[int, str, float, float], ...] = ()
@@ -100,13 +102,17 @@ class Alignment:
         return {(side, topic): (round(p * 1e9), round(f * 1e9))
                 for side, topic, p, f in self.flushed}
 
-    def offset_ns(self, topic: str) -> int:
-        """The offset for a reference message of ``topic`` [ns]."""
-        return round(self.channel_offsets_s.get(topic, self.offset_s) * 1e9)
+    def offset_ns(self, topic: str, side: int = 1) -> int:
+        """What puts a message of ``topic`` from recording ``side`` (0 accident, 1 reference)
+        on the accident's clock [ns]."""
+        base = self.offset_s if side else 0.0
+        return round((base + self.channel_shifts_s.get((side, topic), 0.0)) * 1e9)
 
     def to_json(self) -> dict[str, Any]:
         return {"method": self.method, "offset_s": self.offset_s, "matches": self.matches,
-                "channel_offsets_s": dict(sorted(self.channel_offsets_s.items())),
+                "channel_clocks": [{"recording": ("accident", "reference")[side], "topic": topic,
+                                    "shift_s": shift}
+                                   for (side, topic), shift in sorted(self.channel_shifts_s.items())],
                 "starts_s": {"accident": self.starts_s[0], "reference": self.starts_s[1]},
                 "flushed": [{"recording": ("accident", "reference")[side], "topic": topic,
                              "period_s": p, "flush_period_s": f}
@@ -244,7 +250,7 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
     width = bin_s * 1e9 / 2.0
     by_topic = _content_offsets(head_a, head_b)
     matches = 0
-    channel: dict[str, float] = {}
+    channel: dict[tuple[int, str], float] = {}
     if method == "auto":
         votes = [v for vs in by_topic.values() for v in vs]
         agree = _agreeing(votes, width) if votes else []
@@ -255,7 +261,14 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
                 if len(own) >= MIN_CHANNEL_MATCHES and 5 * len(own) >= 4 * len(vs):
                     o = _median_int(own)
                     if abs(o - offset) > width:
-                        channel[topic] = o / 1e9
+                        # which file's channel is on another clock: the one where it starts
+                        # later after its file's first message
+                        lag_a = head_a.topics[topic].first_ns - sa
+                        lag_b = head_b.topics[topic].first_ns - sb
+                        if lag_a > lag_b:
+                            channel[(0, topic)] = (offset - o) / 1e9
+                        else:
+                            channel[(1, topic)] = (o - offset) / 1e9
         else:
             shared = sorted(set(head_a.topics) & set(head_b.topics))
             if shared:
@@ -410,11 +423,12 @@ def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin
     return None
 
 
-def _start_pairs(ta: _TopicHead, tb: _TopicHead, off: int, lo: float, hi: float, width: float
-                 ) -> list[tuple[tuple[int, bytes, Any], tuple[int, bytes, Any]]]:
+def _start_pairs(ta: _TopicHead, tb: _TopicHead, off_a: int, off: int, lo: float, hi: float,
+                 width: float) -> list[tuple[tuple[int, bytes, Any], tuple[int, bytes, Any]]]:
     """Each accident message of [lo, hi] paired with the nearest unpaired reference message
-    within ``width`` (aligned times, in order)."""
-    xs = sorted((m for m in ta.kept if lo <= m[0] <= hi), key=lambda m: m[0])
+    within ``width`` (times on the accident's clock: ``off_a`` and ``off`` added, in order)."""
+    xs = sorted(((t + off_a, p, d) for t, p, d in ta.kept if lo <= t + off_a <= hi),
+                key=lambda m: m[0])
     ys = sorted((m for m in tb.kept if lo <= m[0] + off <= hi), key=lambda m: m[0])
     pairs = []
     j = 0
@@ -441,7 +455,8 @@ def _learn(head_a: _Head, head_b: _Head, alignment: Alignment, bin_s: float, bas
         tb = head_b.topics.get(topic)
         if tb is None:
             continue
-        pairs = _start_pairs(ta, tb, alignment.offset_ns(topic), lo, hi, bin_s * 1e9 / 2)
+        pairs = _start_pairs(ta, tb, alignment.offset_ns(topic, 0), alignment.offset_ns(topic),
+                             lo, hi, bin_s * 1e9 / 2)
         pairs_of[topic] = pairs
         learner = learners[topic] = FieldLearner()
         for i, (x, y) in enumerate(pairs):
@@ -500,8 +515,9 @@ def describe(alignment: Alignment) -> str:
     if alignment.matches:
         what += f": {alignment.matches} identical messages agree"
     what += ")"
-    if alignment.channel_offsets_s:
+    if alignment.channel_shifts_s:
         what += "; on another clock: " + ", ".join(
-            f"{t} {o:+.3f} s" for t, o in sorted(alignment.channel_offsets_s.items()))
+            f"{t} in the {('accident', 'reference')[side]} {o:+.3f} s"
+            for (side, t), o in sorted(alignment.channel_shifts_s.items()))
     return what
 

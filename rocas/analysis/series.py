@@ -524,7 +524,7 @@ def _one_pass(
     def offset_of(side: int, topic: str) -> int:
         o = offsets[side].get(topic)
         if o is None:
-            o = offsets[side][topic] = 0 if side == ACCIDENT else alignment.offset_ns(topic)
+            o = offsets[side][topic] = alignment.offset_ns(topic, side)
         return o
 
     def check_span(side: int, t: int, t_aligned: int) -> None:
@@ -662,7 +662,7 @@ def _one_pass(
         a.finish_pending()
 
     # the span both files cover, on the accident's clock
-    ref_off = alignment.offset_ns("")
+    ref_off = round(alignment.offset_s * 1e9)
     end_ns = min(last[ACCIDENT], last[REFERENCE] + ref_off) if read[0] and read[1] else origin
     series: dict[str, ChannelSeries] = {}
     accounts: dict[str, ChannelAccount] = {}
