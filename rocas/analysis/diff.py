@@ -109,6 +109,8 @@ class DiffResult:
         noisy_start: the two runs differ at their start (learning was on).
         first_differing_s: topic -> log time of the first differing message in the bin of its
             t* [s] (orders modules whose change points share a bin).
+        last_alike_s: topic -> its last compared bin before t*, where that is more than a bin
+            before (its departure lies anywhere after it) [s].
     """
 
     accident: str
@@ -128,6 +130,7 @@ class DiffResult:
     rules: dict[str, FieldRules] = field(default_factory=dict)
     noisy_start: bool = False
     first_differing_s: dict[str, float] = field(default_factory=dict)
+    last_alike_s: dict[str, float] = field(default_factory=dict)
 
     @property
     def ignored_fields(self) -> dict[str, tuple[str, ...]]:
@@ -167,7 +170,8 @@ class DiffResult:
         quiet = {c for m in modules for c in self.cmg.channels_written_by(m)} - {self.control_channel}
         return find_initial_module(self.cmg, self._t_star(quiet, past_entries), self.control_channel,
                                    self.delta_s, control_onset_s=self.control_onset_s,
-                                   bin_s=self.bin_s, first_differing_s=self.first_differing_s)
+                                   bin_s=self.bin_s, first_differing_s=self.first_differing_s,
+                                   last_alike_s=self.last_alike_s)
 
     def walk_past_window(self, written_by: Collection[str], reach_s: float | None = None
                          ) -> PinpointResult:
@@ -479,13 +483,15 @@ def diff(
     differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
     onset = float(ctrl_series.times_s[differing[0]]) if len(differing) else None
     within = _first_differing(res.series, t_star)
+    alike = _last_alike(res.series, t_star, bin_s)
     pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s,
-                              first_differing_s=within)
+                              first_differing_s=within, last_alike_s=alike)
     pin_entries = None
     if entries:
         pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset,
                                           bin_s=bin_s,
-                                          first_differing_s=_first_differing(res.series, t_after))
+                                          first_differing_s=_first_differing(res.series, t_after),
+                                          last_alike_s=_last_alike(res.series, t_after, bin_s))
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note
@@ -520,7 +526,23 @@ def diff(
         rules=rules,
         noisy_start=noisy,
         first_differing_s=within,
+        last_alike_s=alike,
     )
+
+
+def _last_alike(series: dict[str, ChannelSeries], t_star: dict[str, float | None],
+                bin_s: float) -> dict[str, float]:
+    """topic -> the last compared bin before its t* when it is more than one bin before (a
+    gap: messages lost or set aside there, or a channel slower than the bins) [s]."""
+    out = {}
+    for topic, t in t_star.items():
+        s = series.get(topic)
+        if t is None or s is None or not len(s.times_s):
+            continue
+        k = int(np.searchsorted(s.times_s, t - 1e-9))
+        if 0 < k <= len(s.times_s) and t - s.times_s[k - 1] > bin_s * 1.5:
+            out[topic] = float(s.times_s[k - 1])
+    return out
 
 
 def _first_differing(series: dict[str, ChannelSeries], t_star: dict[str, float | None]

@@ -122,6 +122,7 @@ def find_initial_module(
     bin_s: float | None = None,
     past_window: bool = True,
     first_differing_s: Mapping[str, float] | None = None,
+    last_alike_s: Mapping[str, float] | None = None,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -143,6 +144,11 @@ def find_initial_module(
             its t* [s]: modules whose change points fall into one bin are ordered by it before
             the tie rule (jitter moves a message across a bin edge; the message's own time
             still says which came first). None: bins only.
+        last_alike_s: topic -> the last bin before its t* in which the channel was compared
+            and alike [s]. When a channel has no compared bin just before its t* (messages lost
+            there, the channel at half rate or at 1 Hz), its departure lies anywhere after that
+            bin: a module upstream of the earliest one whose departure may lie at or before the
+            earliest's t* is named instead (deviations travel downstream). None: t* only.
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -164,6 +170,9 @@ def find_initial_module(
             reason = f"t*({which[1]}) is undefined (no change point)"
         elif tv - delta_s <= tu <= tv:
             continue
+        elif (last_alike_s and u[0] == CHANNEL and u[1] in last_alike_s
+              and tv - delta_s <= tu and last_alike_s[u[1]] < tv - 1e-9):
+            continue  # first seen after tv, but not seen alike since before it (a gap)
         else:
             reason = f"t*({u[1]}) = {tu:g} s is outside [{tv - delta_s:g}, {tv:g}] s"
         removed.append(RemovedEdge(u, v, reason))
@@ -224,6 +233,18 @@ def find_initial_module(
         feedback = set()
         reachable, candidates = candidates_without(feedback)
     deviating = min(candidates)[3] if candidates else None
+    if deviating is not None and last_alike_s:
+        t0 = t_star[(MODULE, deviating)]
+        d0 = depth.get((MODULE, deviating), 0)
+
+        def may_precede(m: str, tm: float) -> bool:
+            lo = min((last_alike_s.get(v[1], tm) for v in succ[(MODULE, m)]
+                      if t_star.get(v) == tm), default=tm)
+            return tm > t0 and lo < t0 - 1e-9  # type: ignore[operator]
+
+        upstream_first = [c for c in candidates if c[2] < -d0 and may_precede(c[3], c[0])]
+        if upstream_first:
+            deviating = min(upstream_first, key=lambda c: (c[2], c[0], c[1], c[3]))[3]
 
     path: tuple[str, ...] = ()
     if deviating is not None:

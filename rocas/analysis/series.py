@@ -35,6 +35,7 @@ import dataclasses
 import json
 import math
 import operator
+from array import array
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -515,7 +516,7 @@ def _one_pass(
     # per side: topic -> offset to the accident's clock [ns]; aligned log times; the last
     # payload and its time (repeats)
     offsets: tuple[dict[str, int], dict[str, int]] = ({}, {})
-    times: tuple[dict[str, list[int]], dict[str, list[int]]] = ({}, {})
+    times: tuple[dict[str, array], dict[str, array]] = ({}, {})  # 8 bytes a message
     last_payload: tuple[dict[str, tuple[bytes, int]], dict[str, tuple[bytes, int]]] = ({}, {})
     repeated: tuple[dict[str, int], dict[str, int]] = ({}, {})
     before: tuple[dict[str, int], dict[str, int]] = ({}, {})
@@ -638,7 +639,7 @@ def _one_pass(
             last_payload[side][topic] = (payload, t_al)
             tl = times[side].get(topic)
             if tl is None:
-                tl = times[side][topic] = []
+                tl = times[side][topic] = array("q")
             tl.append(t_al - origin)
             bin_slots = open_bins.get(b)
             if bin_slots is None:
@@ -674,8 +675,8 @@ def _one_pass(
         elif pair[REFERENCE] is None:
             only = "accident"
         a = acc.get(topic, _Acc())
-        ts = (np.asarray(sorted(times[0].get(topic, ())), dtype=np.int64),
-              np.asarray(sorted(times[1].get(topic, ())), dtype=np.int64))
+        ts = (np.sort(np.frombuffer(times[0].get(topic, array("q")), dtype=np.int64)),
+              np.sort(np.frombuffer(times[1].get(topic, array("q")), dtype=np.int64)))
         bins, values, counts, entered, firsts, aside, outside = a.finish(
             ts, end_ns - origin, bin_ns, origin)
         outside = (outside[0] + before[0].get(topic, 0), outside[1] + before[1].get(topic, 0))
