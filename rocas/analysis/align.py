@@ -341,51 +341,70 @@ MATCH_RANGE_S = 3.0
 MATCH_GAIN = 0.5
 
 
-def _signals(th: _TopicHead, base: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """A topic's head as (log times [ns since ``base``], (n, k) float content): every float
-    leaf of each message that decodes, for the messages with the most common number of them
-    (k >= 1)."""
-    rows: list[tuple[int, np.ndarray]] = []
+def _signals(th: _TopicHead, base: int
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """A topic's head as (log times [ns since ``base``], (n, k) float leaves, (n, m) integer
+    leaves) of the messages that decode, for those with the most common numbers of them
+    (k + m >= 1; bools count as integers, strings and bytes are left out)."""
+    rows: list[tuple[int, np.ndarray, np.ndarray]] = []
     for t, payload, decode in th.kept:
         try:
             message = decode(payload)
         except Exception:  # noqa: BLE001 - a foreign file can hold anything
             continue
-        parts = [np.ravel(np.asarray(v, dtype=np.float64))
-                 for _, is_float, v, _ in leaf_pairs(message, message, "", False) if is_float]
-        if parts:
-            rows.append((t - base, np.concatenate(parts)))
+        floats, ints = [], []
+        for _, is_float, v, _ in leaf_pairs(message, message, "", False):
+            x = np.ravel(np.asarray(v))
+            if is_float or x.dtype.kind == "f":
+                floats.append(x.astype(np.float64))
+            elif x.dtype.kind in "iub":
+                ints.append(x.astype(np.float64))
+        f = np.concatenate(floats) if floats else np.zeros(0)
+        i = np.concatenate(ints) if ints else np.zeros(0)
+        if len(f) + len(i):
+            rows.append((t - base, f, i))
     if len(rows) < 10:
         return None
-    sizes: dict[int, int] = {}
-    for _, v in rows:
-        sizes[len(v)] = sizes.get(len(v), 0) + 1
+    sizes: dict[tuple[int, int], int] = {}
+    for _, f, i in rows:
+        sizes[(len(f), len(i))] = sizes.get((len(f), len(i)), 0) + 1
     k = max(sizes, key=lambda n: (sizes[n], n))
-    kept = [(t, v) for t, v in rows if len(v) == k]
-    kept.sort(key=lambda tv: tv[0])
-    return (np.array([t for t, _ in kept], dtype=np.int64),
-            np.stack([v for _, v in kept]))
+    kept = sorted(((t, f, i) for t, f, i in rows if (len(f), len(i)) == k), key=lambda r: r[0])
+    return (np.array([t for t, _, _ in kept], dtype=np.int64),
+            np.stack([f for _, f, _ in kept]), np.stack([i for _, _, i in kept]))
 
 
-def _match_cost(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray],
-                offset: int, reach: float) -> float | None:
-    """Mean scaled difference of each accident message's float content from the reference
-    message nearest to it with ``offset`` applied (within ``reach`` ns); None when fewer than
-    five pairs."""
-    ta, va = a
-    tb, vb = b[0] + offset, b[1]
+def _match_cost(a: tuple[np.ndarray, np.ndarray, np.ndarray],
+                b: tuple[np.ndarray, np.ndarray, np.ndarray], offset: int, reach: float
+                ) -> float | None:
+    """How unlike each accident message is the reference message nearest to it with
+    ``offset`` applied (within ``reach`` ns): the mean over its leaves of the float leaves'
+    differences scaled by their spread (at most 3) and the integer leaves' inequality (0 or
+    1); None when fewer than five messages pair."""
+    ta = a[0]
+    tb = b[0] + offset
     k = np.clip(np.searchsorted(tb, ta), 1, len(tb) - 1)
     nearer = np.where(np.abs(tb[k - 1] - ta) <= np.abs(tb[k] - ta), k - 1, k)
     close = np.abs(tb[nearer] - ta) <= reach
     if close.sum() < 5:
         return None
-    scale = np.nanstd(np.concatenate([va, vb]), axis=0)
-    use = np.isfinite(scale) & (scale > 0)
-    if not use.any():
+    parts = []
+    fa, fb = a[1], b[1]
+    if fa.shape[1]:
+        scale = np.nanstd(np.concatenate([fa, fb]), axis=0)
+        use = np.isfinite(scale) & (scale > 0)
+        if use.any():
+            with np.errstate(invalid="ignore"):
+                d = np.abs(fa[close][:, use] - fb[nearer[close]][:, use]) / scale[use]
+            parts.append(np.minimum(np.nan_to_num(d, nan=0.0), 3.0))
+    ia, ib = a[2], b[2]
+    if ia.shape[1]:
+        moving = np.ptp(np.concatenate([ia, ib]), axis=0) > 0
+        if moving.any():
+            parts.append((ia[close][:, moving] != ib[nearer[close]][:, moving]).astype(float))
+    if not parts:
         return None
-    with np.errstate(invalid="ignore"):
-        d = np.abs(va[close][:, use] - vb[nearer[close]][:, use]) / scale[use]
-    return float(np.nanmean(d))
+    return float(np.concatenate(parts, axis=1).mean())
 
 
 def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin_s: float
@@ -398,7 +417,8 @@ def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin
     for t in topics:
         a = _signals(head_a.topics[t], base_a)
         b = _signals(head_b.topics[t], base_b)
-        if a is not None and b is not None and a[1].shape[1] == b[1].shape[1]:
+        if a is not None and b is not None and a[1].shape[1] == b[1].shape[1] \
+                and a[2].shape[1] == b[2].shape[1]:
             pairs.append((a, b))
     if not pairs:
         return None
@@ -418,9 +438,17 @@ def _best_match(head_a: _Head, head_b: _Head, topics: list[str], start: int, bin
     if not scored or base is None:
         return None
     c, _, best = min(scored)
-    if c < MATCH_GAIN * base:
-        return best
-    return None
+    if not c < MATCH_GAIN * base:
+        return None
+    # the grid's step is half a bin: the median gap between the messages it pairs refines it
+    gaps = []
+    for a, b in pairs:
+        ta, tb = a[0], b[0] + best - shift
+        k = np.clip(np.searchsorted(tb, ta), 1, len(tb) - 1)
+        nearer = np.where(np.abs(tb[k - 1] - ta) <= np.abs(tb[k] - ta), k - 1, k)
+        d = ta - tb[nearer]
+        gaps.extend(int(x) for x in d[np.abs(d) <= reach])
+    return best + _median_int(gaps) if gaps else best
 
 
 def _start_pairs(ta: _TopicHead, tb: _TopicHead, off_a: int, off: int, lo: float, hi: float,
