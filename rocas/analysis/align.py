@@ -232,6 +232,9 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
         UsageError: ``method`` names a topic that is not in both files' heads.
     """
     head_a, head_b = _read_head(accident), _read_head(reference)
+    flushed = flushed_channels(head_a, head_b)
+    for side, topic, period, flush in flushed:
+        _unflush((head_a, head_b)[side].topics[topic], round(period * 1e9), round(flush * 1e9))
     warnings: list[str] = []
     starts: list[int | None] = []
     for rec, head in ((accident, head_a), (reference, head_b)):
@@ -294,8 +297,7 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
         how, offset = f"first message of {method}", ta.first_ns - tb.first_ns
     origin = max(sa, sb + offset)
     alignment = Alignment(how, offset / 1e9, matches, channel, origin,
-                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9),
-                          flushed_channels(head_a, head_b))
+                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9), flushed)
     rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
                           list(ignore))
     return alignment, rules, noisy, tuple(warnings)
@@ -332,6 +334,41 @@ def flushed_channels(head_a: _Head, head_b: _Head) -> tuple[tuple[int, str, floa
             if len(gaps) and period > 0:
                 out.append((side, topic, period / 1e9, float(np.median(gaps)) / 1e9))
     return tuple(out)
+
+
+def unflush(period_ns: int, flush_ns: int) -> Callable[[int], int]:
+    """A function that gives a flushed channel's messages, fed in file order, their times
+    back: one channel period after the one before in their flush, counted from the flush
+    before (the first flush counts from one flush period before it); never later than the
+    flush itself."""
+    state: list[int] = []  # [this flush's log time, the last flush's, index within this flush]
+
+    def at(t: int) -> int:
+        if not state:
+            state.extend((t, t - flush_ns, -1))
+        if t != state[0]:
+            state[1], state[0], state[2] = state[0], t, -1
+        state[2] += 1
+        return min(t, state[1] + (state[2] + 1) * period_ns)
+
+    return at
+
+
+def _unflush(th: _TopicHead, period_ns: int, flush_ns: int) -> None:
+    """A head's flushed channel with its messages back at their times (as the pass reads
+    them), its hashes and first time recomputed from them."""
+    at = unflush(period_ns, flush_ns)
+    th.kept = [(at(t), p, d) for t, p, d in th.kept]
+    th.hashes = {}
+    for t, p, _ in th.kept:
+        key = (len(p), hash(p))
+        slot = th.hashes.get(key)
+        if slot is None:
+            th.hashes[key] = [1, t]
+        else:
+            slot[0] += 1
+    if th.kept:
+        th.first_ns = min(t for t, _, _ in th.kept)
 
 
 #: How far from the first-message offset the best match of content is looked for [s].

@@ -44,7 +44,7 @@ import numpy as np
 from google.protobuf import descriptor_pb2
 from google.protobuf.message import DecodeError
 
-from rocas.analysis.align import MAX_SPAN_S, Alignment, align
+from rocas.analysis.align import MAX_SPAN_S, Alignment, align, unflush
 from rocas.analysis.mdr import EXACT, Tolerance, mdr, repeated_lengths
 from rocas.analysis.noise import FieldRules, masked_mdr
 from rocas.errors import RecordingError
@@ -580,29 +580,17 @@ def _one_pass(
                 a.add_bin(b, xs, ys, rules.get(topic, tolerance), adjacent_pairing)
         scored_below = max(scored_below, below)
 
-    flush_plan = alignment.flush_plan()
-    # (side, topic) -> [this flush's log time, the last flush's, index within this flush]
-    flushes: dict[tuple[int, str], list[int]] = {}
-
-    def unflushed(side: int, topic: str, t: int) -> int:
-        """A flushed channel's message back at its time: one channel period after the one
-        before it in its flush, counted from the flush before (module docstring of align)."""
-        period, flush = flush_plan[(side, topic)]
-        st = flushes.get((side, topic))
-        if st is None:
-            st = flushes[(side, topic)] = [t, t - flush, -1]
-        if t != st[0]:
-            st[1], st[0], st[2] = st[0], t, -1
-        st[2] += 1
-        return min(t, st[1] + (st[2] + 1) * period)
+    # (side, topic) -> its messages back at their times, for channels stamped at flush time
+    unflushed = {key: unflush(period, flush)
+                 for key, (period, flush) in alignment.flush_plan().items()}
 
     def head(side: int) -> tuple[_Streamed | None, float]:
         """The side's next message and its bin (inf at the end)."""
         msg = next(streams[side], None)
         if msg is None:
             return None, math.inf
-        if flush_plan and (side, msg[0].topic) in flush_plan:
-            msg = (msg[0], unflushed(side, msg[0].topic, msg[1]), *msg[2:])
+        if unflushed and (at := unflushed.get((side, msg[0].topic))) is not None:
+            msg = (msg[0], at(msg[1]), *msg[2:])
         t_al = msg[1] + offset_of(side, msg[0].topic)
         check_span(side, msg[1], t_al)
         return msg, bin_of(side, t_al)
