@@ -45,8 +45,6 @@ MAX_START_MDR = 0.2
 #: Relative difference of the two spans above which a pair that already differs at the
 #: start is refused as two different drives [fraction of the longer span].
 MAX_SPAN_DIFFERENCE = 0.05
-#: Shortest/longest span of the two recordings below which the pair gets a warning.
-MIN_SPAN_RATIO = 0.5
 
 
 @dataclass(frozen=True)
@@ -425,6 +423,17 @@ def diff(
             what + (f": {damage[0]}" if damage else ""),
             f"check the {'files' if len(empty) == 2 else 'file'} with 'mcap info'",
         )
+    if res.compared_s[1] <= 0 and min(res.span_s) > 0:
+        # the two files (on one clock, as aligned) do not overlap: nothing can be compared
+        raise RecordingError(
+            f"{accident} and {reference} share no span of time: aligned as "
+            f"{describe(alignment)}, the {'reference' if alignment.starts_s[1] >= 0 else 'accident'}"
+            f" starts after the other ends (the accident covers "
+            f"{alignment.starts_s[0]:.2f} to {res.ends_s[0]:.2f} s, the reference "
+            f"{alignment.starts_s[1]:.2f} to {res.ends_s[1]:.2f} s)",
+            "diff recordings of the same drive; if they are on one clock with no identical "
+            "message, try --align first or --align log-time",
+        )
     channel_infos, topology_note = _channels_for_topology(
         str(accident), list(rec_a.channels.values()),
         str(reference), list(rec_b.channels.values()),
@@ -644,9 +653,9 @@ def check_pair(
     recordings is over :data:`MAX_START_MDR`: runs of one scenario agree there, aligned at
     their first messages) *and* whose spans differ by more than :data:`MAX_SPAN_DIFFERENCE`.
     ``allow_unrelated`` turns those two refusals into warnings. Warned: a pair that differs
-    at the start with equal spans (wall-clock stamps in headers look like that too), spans
-    that differ by more than :data:`MIN_SPAN_RATIO`, a recording shorter than the change
-    points' baseline window.
+    at the start with equal spans (wall-clock stamps in headers look like that too), a
+    recording shorter than the change points' baseline window. (What one file covers beyond
+    the other is not compared; :func:`_span_warnings` says so.)
 
     Args:
         res: the pair's :class:`~rocas.analysis.series.SeriesResult`.
@@ -668,11 +677,6 @@ def check_pair(
                 "the change points are judged against"
             )
     short, long_ = sorted(res.span_s)
-    if short < MIN_SPAN_RATIO * long_:
-        out.append(
-            f"{accident} covers {res.span_s[0]:.1f} s and {reference} {res.span_s[1]:.1f} s: past "
-            f"{short:.1f} s one recording's messages are compared with nothing"
-        )
     refuse: list[str] = []
     topics = res.channels
     shared = [t for t, (a, b) in topics.items() if a is not None and b is not None]

@@ -329,3 +329,31 @@ def test_content_that_enters_one_run_first_shrinks_or_is_alike_is_not_marked(tmp
                     [[truck]] * 3 + [[truck, truck]] * 3) == []
     # content entered alike, and the two differ a bin later
     assert _entered(tmp_path, [[]] * 3 + [[bus]] + [[car]] * 2, [[]] * 3 + [[bus]] + [[truck]] * 2) == []
+
+
+def test_two_files_that_share_no_span_are_refused(tmp_path):
+    from rocas.analysis.diff import diff
+
+    times = [i / 10 for i in range(40)]
+    a = _write(tmp_path / "a.mcap", times, list(range(40)))
+    b = _write(tmp_path / "b.mcap", times, list(range(100, 140)), start_ns=10 * S)
+    with pytest.raises(RecordingError, match="share no span of time"):
+        diff(a, b, align="log-time")
+    # by their first messages they overlap
+    assert diff(a, b, align="first").compared_s == pytest.approx((0.0, 3.9))
+
+
+def test_a_late_logger_is_aligned_by_identical_messages(tmp_path):
+    from rocas.analysis.diff import diff
+
+    times = [i / 10 for i in range(60)]
+    a = _write(tmp_path / "a.mcap", times, list(range(60)))
+    # the reference's logger started 1 s later, on the same clock, and its run differs at 4 s
+    b = _write(tmp_path / "b.mcap", times[10:], list(range(10, 40)) + [v + 1 for v in range(40, 60)])
+    r = diff(a, b)
+    assert r.alignment.method == "content" and r.alignment.offset_s == 0.0
+    assert r.compared_s == pytest.approx((0.0, 4.9))
+    assert r.channels[0].change_point_s == pytest.approx(3.0)
+    assert any("first 1.00 s lie outside the span" in w for w in r.warnings)
+    # by first messages (the rule before alignment) the runs seem to differ from the start
+    assert diff(a, b, align="first").alignment.offset_s == pytest.approx(-1.0)
