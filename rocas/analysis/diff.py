@@ -130,6 +130,32 @@ class DiffResult:
     first_differing_s: dict[str, float] = field(default_factory=dict)
     last_alike_s: dict[str, float] = field(default_factory=dict)
 
+    def comparison_notes(self) -> list[str]:
+        """How the two recordings were compared: the alignment, the span, and what the start
+        taught (fields set aside, learned tolerances), one line each."""
+        lines = []
+        if self.alignment is not None:
+            lines.append(f"Aligned: {describe(self.alignment)}.")
+        if self.compared_s is not None:
+            lo, hi = self.compared_s
+            lines.append(f"Compared: {lo:.2f}-{hi:.2f} s (the span both recordings cover).")
+        ignored = self.ignored_fields
+        if ignored:
+            n = sum(len(p) for p in ignored.values())
+            shown = "; ".join(f"{t}: {', '.join(p[:4])}{' ...' if len(p) > 4 else ''}"
+                              for t, p in list(ignored.items())[:4])
+            lines.append(f"Set aside ({n} fields that differ in nearly every message of the shared "
+                         f"start: stamps, counters, ids): {shown}"
+                         + (f"; and {len(ignored) - 4} more channels" if len(ignored) > 4 else "")
+                         + ".")
+        tol = self.learned_tolerances
+        if tol:
+            n = sum(len(p) for p in tol.values())
+            lines.append(f"Noise learned from the shared start: {n} float fields on {len(tol)} "
+                         "channels compared within twice their largest difference there "
+                         "(--json lists them; --exact turns this off).")
+        return lines
+
     @property
     def ignored_fields(self) -> dict[str, tuple[str, ...]]:
         """topic -> the leaf paths left out of its messages (learned or asked for)."""

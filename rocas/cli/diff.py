@@ -129,7 +129,7 @@ def render(result: DiffResult, env: Env) -> None:
                       _num(c.mdr_before), _num(c.mdr_after), change)
     out.print(table)
     out.print()
-    for line in comparison_lines(result):
+    for line in result.comparison_notes():
         prose(out, line)
     if p.fallback:
         prose(out, f"Note: {p.fallback}.")
@@ -152,35 +152,6 @@ def render(result: DiffResult, env: Env) -> None:
         out.print("Other modules:")
         for m, why in sorted(p.exclusions.items()):
             prose(out, f"  {m}: {why}")
-
-
-def comparison_lines(result: DiffResult) -> list[str]:
-    """How the two recordings were compared: the alignment, the span, and what the start
-    taught (fields set aside, learned tolerances), one line each."""
-    from rocas.analysis.align import describe
-
-    lines = []
-    if result.alignment is not None:
-        lines.append(f"Aligned: {describe(result.alignment)}.")
-    if result.compared_s is not None:
-        lo, hi = result.compared_s
-        lines.append(f"Compared: {lo:.2f}-{hi:.2f} s (the span both recordings cover).")
-    ignored = result.ignored_fields
-    if ignored:
-        n = sum(len(p) for p in ignored.values())
-        shown = "; ".join(f"{t}: {', '.join(p[:4])}{' ...' if len(p) > 4 else ''}"
-                          for t, p in list(ignored.items())[:4])
-        lines.append(f"Set aside ({n} fields that differ in nearly every message of the shared "
-                     f"start: stamps, counters, ids): {shown}"
-                     + (f"; and {len(ignored) - 4} more channels" if len(ignored) > 4 else "")
-                     + ".")
-    tol = result.learned_tolerances
-    if tol:
-        n = sum(len(p) for p in tol.values())
-        lines.append(f"Noise learned from the shared start: {n} float fields on {len(tol)} "
-                     "channels compared within twice their largest difference there "
-                     "(--json lists them; --exact turns this off).")
-    return lines
 
 
 def run(args: argparse.Namespace, env: Env) -> int:

@@ -21,6 +21,6 @@ def phase_diff(run: Run) -> dict[str, Any]:
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
     summary = {"deviating_module": data["deviating_module"], "path": data["path"],
                "control_channel": data["control_channel"], "fallback": data["fallback"],
-               "entries": data["entries"]}
+               "entries": data["entries"], "warnings": data["warnings"]}
     run.finish("diff", summary, time.perf_counter() - t0, 0)
     return summary

@@ -106,8 +106,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
         "first_fix_batch_evaluations": cyber.get("first_fix_batch_evaluations"),
         "evaluations": dict(state["evaluations"]),
         # a result computed from less than the whole recording says so (docs/errors.md)
-        "warnings": list((done.get("replay") or {}).get("warnings", [])),
-        "complete": bool((done.get("replay") or {}).get("complete", True)),
+        "warnings": list((done.get("replay") or {}).get("warnings", []))
+        + [f"diff: {w}" for w in _texts((done.get("diff") or {}).get("warnings"))],
+        "complete": bool((done.get("replay") or {}).get("complete", True))
+        and not _texts((done.get("diff") or {}).get("warnings")),
         "timings_s": dict(state["timings_s"]),
     }
     entity_phrase = "the world"
@@ -300,6 +302,11 @@ def regression_text(validation: dict[str, Any]) -> str:
             f"{'does not' if better else 'avoids it'}, and the reverse in "
             f"{test['original_only'] if better else test['fix_only']} (sign test p = "
             f"{test['p_value']:.2g}, level {test['alpha_per_look']:.2g} per look)")
+
+
+def _texts(value: Any) -> list[str]:
+    """A stored list of warning lines (anything else: none)."""
+    return [str(v) for v in value] if isinstance(value, list) else []
 
 
 def markdown(report: dict[str, Any]) -> str:

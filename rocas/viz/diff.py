@@ -346,9 +346,16 @@ def report_markdown(result: DiffResult) -> str:
 
         entered = {c.topic: c.entered_s for c in result.channels if c.entered_s is not None}
         lines += ["", f"Note: {entries_text(entered, e.deviating_module)}."]
+    notes = result.comparison_notes()
+    if notes or result.warnings:
+        lines += ["", "## How the recordings were compared", ""]
+        lines += [f"- {n}" for n in notes]
+        lines += [f"- Warning: {w}" for w in result.warnings]
     lines += ["", "| channel | writers | t* [s] | MDR before | MDR after |", "|---|---|---|---|---|"]
     for c in result.channels:
         t = "—" if c.change_point_s is None else f"{c.change_point_s:.2f}"
+        if c.change_points.converges_s:
+            t += f" (converges at {c.change_points.converges_s[0]:.2f})"
         before = "—" if c.mdr_before is None else f"{c.mdr_before:.3f}"
         after = "—" if c.mdr_after is None else f"{c.mdr_after:.3f}"
         lines.append(f"| `{c.topic}` | {', '.join(c.writers) or '—'} | {t} | {before} | {after} |")
