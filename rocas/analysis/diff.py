@@ -109,6 +109,7 @@ class DiffResult:
             t* [s] (orders modules whose change points share a bin).
         last_alike_s: topic -> its last compared bin before t*, where that is more than a bin
             before (its departure lies anywhere after it) [s].
+        timing_s: how far apart the two runs log one message [s] (0 on one tick).
     """
 
     accident: str
@@ -129,6 +130,7 @@ class DiffResult:
     noisy_start: bool = False
     first_differing_s: dict[str, float] = field(default_factory=dict)
     last_alike_s: dict[str, float] = field(default_factory=dict)
+    timing_s: float = 0.0
 
     def comparison_notes(self) -> list[str]:
         """How the two recordings were compared: the alignment, the span, and what the start
@@ -195,7 +197,7 @@ class DiffResult:
         return find_initial_module(self.cmg, self._t_star(quiet, past_entries), self.control_channel,
                                    self.delta_s, control_onset_s=self.control_onset_s,
                                    bin_s=self.bin_s, first_differing_s=self.first_differing_s,
-                                   last_alike_s=self.last_alike_s)
+                                   last_alike_s=self.last_alike_s, timing_s=self.timing_s)
 
     def walk_past_window(self, written_by: Collection[str], reach_s: float | None = None
                          ) -> PinpointResult:
@@ -520,13 +522,15 @@ def diff(
     within = _first_differing(res.series, t_star)
     alike = _last_alike(res.series, t_star, bin_s)
     pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s,
-                              first_differing_s=within, last_alike_s=alike)
+                              first_differing_s=within, last_alike_s=alike,
+                              timing_s=res.timing_s)
     pin_entries = None
     if entries:
         pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset,
                                           bin_s=bin_s,
                                           first_differing_s=_first_differing(res.series, t_after),
-                                          last_alike_s=_last_alike(res.series, t_after, bin_s))
+                                          last_alike_s=_last_alike(res.series, t_after, bin_s),
+                                          timing_s=res.timing_s)
     warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
     warnings += res.warnings + pair_warnings
     warnings += tuple(cmg_warnings) + topology_note
@@ -562,6 +566,7 @@ def diff(
         noisy_start=noisy,
         first_differing_s=within,
         last_alike_s=alike,
+        timing_s=res.timing_s,
     )
 
 

@@ -123,6 +123,7 @@ def find_initial_module(
     past_window: bool = True,
     first_differing_s: Mapping[str, float] | None = None,
     last_alike_s: Mapping[str, float] | None = None,
+    timing_s: float = 0.0,
 ) -> PinpointResult:
     """Run Algorithm 1.
 
@@ -149,6 +150,8 @@ def find_initial_module(
             there, the channel at half rate or at 1 Hz), its departure lies anywhere after that
             bin: a module upstream of the earliest one whose departure may lie at or before the
             earliest's t* is named instead (deviations travel downstream). None: t* only.
+        timing_s: how far apart the two runs log one message [s]: first differing messages
+            closer than this within one bin are a tie (the upstream rule decides).
     """
     succ = cmg.successors
     t_star: dict[Node, float | None] = {}
@@ -233,6 +236,10 @@ def find_initial_module(
         feedback = set()
         reachable, candidates = candidates_without(feedback)
     deviating = min(candidates)[3] if candidates else None
+    if deviating is not None and timing_s > 0:
+        first = min(candidates)
+        tied = [c for c in candidates if c[0] == first[0] and c[1] <= first[1] + timing_s]
+        deviating = min(tied, key=lambda c: (c[2], c[1], c[3]))[3]
     if deviating is not None and last_alike_s:
         t0 = t_star[(MODULE, deviating)]
         d0 = depth.get((MODULE, deviating), 0)

@@ -210,6 +210,8 @@ class _Acc:
     counts: list[tuple[int, int]] = field(default_factory=list)
     entered: list[bool] = field(default_factory=list)
     first_diff: list[float] = field(default_factory=list)
+    #: the largest gap in log time between two runs' copies of one message [ns]
+    same_gap: int = 0
     pending: _Pending | None = None
     #: the first messages of the last bin, when its messages were equal pair by pair
     equal_before: tuple[_Entry, _Entry] | None = None
@@ -239,6 +241,9 @@ class _Acc:
             # decoded once here: their score and whether content entered both read them
             pairs[0] = (_decoded(pairs[0][0]), _decoded(pairs[0][1]))
         scores = [_score(x, y, tol) for x, y in pairs]
+        for x, y in pairs:
+            if x[0] != y[0] and x[3] == y[3]:
+                self.same_gap = max(self.same_gap, abs(x[0] - y[0]))
         # decoded now: an unpaired message counts only if it decodes, and may pair next bin
         leftover = sorted([(ACCIDENT, _decoded(e)) for e in left_a]
                           + [(REFERENCE, _decoded(e)) for e in left_b], key=lambda se: se[1][0])
@@ -388,6 +393,9 @@ class SeriesResult:
         ends_s: (accident, reference) each file's last message [s since t = 0, aligned].
         accounts: topic -> what became of its messages besides the scored pairs (only
             channels with something to report).
+        timing_s: how far apart in log time the two runs write one message: over the
+            channels with a message in both, the median of each channel's largest gap between
+            the two copies of a message [s]; 0 for two runs on one tick (every simulated pair).
     """
 
     series: dict[str, ChannelSeries]
@@ -401,6 +409,7 @@ class SeriesResult:
     compared_s: tuple[float, float] = (0.0, 0.0)
     ends_s: tuple[float, float] = (0.0, 0.0)
     accounts: dict[str, ChannelAccount] = field(default_factory=dict)
+    timing_s: float = 0.0
 
 
 class _TooLate(Exception):
@@ -698,7 +707,16 @@ def _one_pass(
         ends_s=((last[ACCIDENT] - origin) / 1e9 if read[0] else 0.0,
                 (last[REFERENCE] + ref_off - origin) / 1e9 if read[1] else 0.0),
         accounts=accounts,
+        timing_s=_median_gap(acc) / 1e9,
     )
+
+
+def _median_gap(acc: dict[str, _Acc]) -> float:
+    gaps = sorted(a.same_gap for a in acc.values() if a.same_gap)
+    if not gaps:
+        return 0.0
+    k = len(gaps) // 2
+    return float(gaps[k]) if len(gaps) % 2 else (gaps[k - 1] + gaps[k]) / 2.0
 
 
 def _stops(times: tuple[np.ndarray, np.ndarray], end_ns: float, bin_ns: float
