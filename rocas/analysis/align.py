@@ -27,7 +27,8 @@ a noisy pair (:mod:`rocas.analysis.noise`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import itertools
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,6 +53,9 @@ from rocas.recording.reader import Recording
 MAX_SPAN_S = 30 * 86400.0
 #: Log time read from the start of each file to align them and learn their noise [s].
 HEAD_S = 8.0
+#: Messages per topic and side whose payloads are matched between the heads (enough to agree
+#: on an offset; the first ones, so a late start of up to the head's length still overlaps).
+HASHED_PER_TOPIC = 256
 #: Payloads kept per topic and side from the head, to learn the noise from.
 KEEP_PER_TOPIC = 400
 #: Payload bytes kept per side from the head.
@@ -60,6 +64,8 @@ KEEP_BYTES = 64 << 20
 MIN_MATCHES = 3
 #: Fewest matches on one topic for it to get its own offset.
 MIN_CHANNEL_MATCHES = 5
+#: Payload bytes of a head held to go on with its pass instead of reading it again.
+RESUME_BYTES = 64 << 20
 #: Start pairs used per channel to learn its noise.
 MAX_START_PAIRS = 60
 
@@ -124,12 +130,16 @@ class _TopicHead:
     first_ns: int
     hashes: dict[tuple[int, int], list[int]] = field(default_factory=dict)  # key -> [n, t]
     kept: list[tuple[int, bytes, Callable[[bytes], Any]]] = field(default_factory=list)
+    hashed: int = 0  # messages whose payload went into hashes
 
 
 @dataclass
 class _Head:
     topics: dict[str, _TopicHead]
     earliest_ns: int | None
+    #: the pass the head began, to go on with: its messages read so far, then the rest (None
+    #: when they took more than :data:`RESUME_BYTES`; the pass then reads the file again)
+    resume: Iterator[Any] | None = None
 
 
 def _read_head(rec: Recording) -> _Head:
@@ -139,11 +149,21 @@ def _read_head(rec: Recording) -> _Head:
     kept_bytes = 0
     limit = round(HEAD_S * 1e9)
     stream = rec.undecoded()
+    seen: list[Any] | None = []
+    seen_bytes = 0
+    ended = True
     try:
-        for ch, t, payload, decode in stream:
+        for msg in stream:
+            ch, t, payload, decode = msg
+            if seen is not None:
+                seen.append(msg)
+                seen_bytes += len(payload)
+                if seen_bytes > RESUME_BYTES:
+                    seen = None
             if first_read is None:
                 first_read = t
             if t > first_read + limit:
+                ended = False
                 break
             earliest = t if earliest is None else min(earliest, t)
             if abs(t - first_read) > MAX_SPAN_S * 1e9:
@@ -159,20 +179,30 @@ def _read_head(rec: Recording) -> _Head:
                 th = topics[ch.topic] = _TopicHead(t)
             elif t < th.first_ns:
                 th.first_ns = t
-            key = (len(payload), hash(payload))
-            slot = th.hashes.get(key)
-            if slot is None:
-                th.hashes[key] = [1, t]
-            else:
-                slot[0] += 1
+            if th.hashed < HASHED_PER_TOPIC:
+                th.hashed += 1
+                key = (len(payload), hash(payload))
+                slot = th.hashes.get(key)
+                if slot is None:
+                    th.hashes[key] = [1, t]
+                else:
+                    slot[0] += 1
             if len(th.kept) < KEEP_PER_TOPIC and kept_bytes + len(payload) <= KEEP_BYTES:
                 th.kept.append((t, payload, decode))
                 kept_bytes += len(payload)
-    finally:
-        close = getattr(stream, "close", None)
-        if close is not None:
-            close()
-    return _Head(topics, earliest)
+    except BaseException:
+        _close(stream)
+        raise
+    if seen is None:
+        _close(stream)
+        return _Head(topics, earliest)
+    return _Head(topics, earliest, iter(seen) if ended else itertools.chain(seen, stream))
+
+
+def _close(stream: Any) -> None:
+    close = getattr(stream, "close", None)
+    if close is not None:
+        close()
 
 
 def _agreeing(offsets: list[int], width_ns: float) -> list[int]:
@@ -211,7 +241,8 @@ def _content_offsets(a: _Head, b: _Head) -> dict[str, list[int]]:
 def align(accident: Recording, reference: Recording, *, method: str = "auto",
           bin_s: float = 0.1, baseline_s: float = 3.0, tolerance: Tolerance | None = None,
           learn: bool = True, ignore: Iterable[str] = ()
-          ) -> tuple[Alignment, dict[str, FieldRules], bool, tuple[str, ...]]:
+          ) -> tuple[Alignment, dict[str, FieldRules], bool, tuple[str, ...],
+                     tuple[Iterator[Any] | None, Iterator[Any] | None]]:
     """Align the two recordings and learn each channel's comparison rules from their start.
 
     Args:
@@ -226,7 +257,8 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
 
     Returns:
         (the alignment, topic -> rules for the topics that have any, whether the pair is
-        noisy at its start, warning lines).
+        noisy at its start, warning lines, each recording's undecoded pass as the head began
+        it, to go on with (:meth:`Recording.undecoded`'s items; None: read it again)).
 
     Raises:
         UsageError: ``method`` names a topic that is not in both files' heads.
@@ -248,7 +280,7 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
         starts.append(start)
     if starts[0] is None or starts[1] is None:
         alignment = Alignment("file starts", 0.0, 0, {}, starts[0] or starts[1] or 0, (0.0, 0.0))
-        return alignment, {}, False, tuple(warnings)
+        return alignment, {}, False, tuple(warnings), (head_a.resume, head_b.resume)
     sa, sb = starts[0], starts[1]
     width = bin_s * 1e9 / 2.0
     by_topic = _content_offsets(head_a, head_b)
@@ -300,7 +332,7 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
                           ((sa - origin) / 1e9, (sb + offset - origin) / 1e9), flushed)
     rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
                           list(ignore))
-    return alignment, rules, noisy, tuple(warnings)
+    return alignment, rules, noisy, tuple(warnings), (head_a.resume, head_b.resume)
 
 
 #: A channel is flushed in a recording when at least this fraction of its messages in the head

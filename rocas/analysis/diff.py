@@ -423,14 +423,14 @@ def diff(
                 f"{accident} or {reference}"))
 
     tolerance = Tolerance(atol, rtol)
-    alignment, rules, noisy, align_warnings = align_recordings(
+    alignment, rules, noisy, align_warnings, resume = align_recordings(
         rec_a, rec_b, method=align, bin_s=bin_s, baseline_s=cfg.baseline_s,
         tolerance=None if tolerance.exact else tolerance, learn=learn_noise,
         ignore=ignore_fields)
     res = compute_series(
         rec_a, rec_b, bin_s=bin_s, tolerance=tolerance,
         reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins, progress=progress,
-        alignment=alignment, rules=rules,
+        alignment=alignment, rules=rules, resume=resume,
     )
     res = dataclasses.replace(res, warnings=align_warnings + res.warnings)
     empty = [

@@ -431,6 +431,7 @@ def compute_series(
     progress: Callable[[int, int], None] | None = None,
     alignment: Alignment | None = None,
     rules: dict[str, FieldRules] | None = None,
+    resume: tuple[Iterator[Any] | None, Iterator[Any] | None] = (None, None),
 ) -> SeriesResult:
     """Stream both recordings and compute each channel's MDR series.
 
@@ -439,7 +440,8 @@ def compute_series(
     window wide enough for it (module docstring). ``progress``, if given, is called now and
     then with (bytes read, bytes in both files) of the current pass. ``alignment`` puts the
     reference on the accident's clock (None: :func:`~rocas.analysis.align.align` with its
-    defaults); ``rules``: topic -> how its messages are compared, instead of ``tolerance``.
+    defaults); ``rules``: topic -> how its messages are compared, instead of ``tolerance``;
+    ``resume``: each recording's undecoded pass as alignment began it, for the first pass.
 
     Raises:
         RecordingError: a topic's schema differs between the two files, or a recording's log
@@ -451,15 +453,16 @@ def compute_series(
         raise ValueError("reorder_window_s must be a positive number of seconds")
     warnings: tuple[str, ...] = ()
     if alignment is None:
-        alignment, learned, _, warnings = align(accident, reference, method="first",
-                                                bin_s=bin_s, tolerance=tolerance, learn=False)
+        alignment, learned, _, warnings, resume = align(
+            accident, reference, method="first", bin_s=bin_s, tolerance=tolerance, learn=False)
         rules = learned if rules is None else rules
     window_s = reorder_window_s
     lazy = True
     while True:
         try:
             res = _one_pass(accident, reference, bin_s, tolerance, window_s, adjacent_pairing,
-                            alignment, rules or {}, lazy, progress)
+                            alignment, rules or {}, lazy, progress, resume)
+            resume = (None, None)
         except (_Undecodable, _TooLate, RecordingError) as exc:
             if lazy:
                 # a pass that decodes only differing payloads holds undecodable messages
@@ -501,6 +504,7 @@ def _one_pass(
     rules: dict[str, FieldRules],
     lazy: bool,
     progress: Callable[[int, int], None] | None = None,
+    resume: tuple[Iterator[Any] | None, Iterator[Any] | None] = (None, None),
 ) -> SeriesResult:
     """One streamed pass with a fixed reorder window; raises :class:`_TooLate` if it is short.
     ``lazy``: read the messages undecoded and decode only those whose payload differs from
@@ -516,7 +520,8 @@ def _one_pass(
     bin_ns = bin_s * 1e9
     scored_below = 0  # every bin below this one has been scored
     origin = alignment.origin_ns
-    streams = [_stream(accident, lazy), _stream(reference, lazy)]
+    streams = [r if r is not None and lazy else _stream(rec, lazy)
+               for r, rec in zip(resume, (accident, reference), strict=True)]
     first = [math.inf, math.inf]
     last = [-math.inf, -math.inf]
     max_span_ns = MAX_SPAN_S * 1e9
@@ -524,33 +529,20 @@ def _one_pass(
     total_bytes = accident.size + reference.size
     # per side: topic -> offset to the accident's clock [ns]; aligned log times; the last
     # payload and its time (repeats)
-    offsets: tuple[dict[str, int], dict[str, int]] = ({}, {})
     times: tuple[dict[str, array], dict[str, array]] = ({}, {})  # 8 bytes a message
-    last_payload: tuple[dict[str, tuple[bytes, int]], dict[str, tuple[bytes, int]]] = ({}, {})
     repeated: tuple[dict[str, int], dict[str, int]] = ({}, {})
     before: tuple[dict[str, int], dict[str, int]] = ({}, {})
     repeat_ns = REPEAT_S * 1e9
 
-    def offset_of(side: int, topic: str) -> int:
-        o = offsets[side].get(topic)
-        if o is None:
-            o = offsets[side][topic] = alignment.offset_ns(topic, side)
-        return o
-
-    def check_span(side: int, t: int, t_aligned: int) -> None:
-        if t < first[side]:
-            first[side] = t
-        if t > last[side]:
-            last[side] = t
-        if last[side] - first[side] > max_span_ns or abs(t_aligned - origin) > max_span_ns:
-            lo, hi = first[side], last[side]
-            raise RecordingError(
-                f"{recs[side].path}: log times span {(hi - lo) / 86400e9:.4g} days "
-                f"({lo} to {hi} ns): a clock that wrapped past 2^64 ns or a corrupted timestamp, "
-                "not one drive",
-                "check the recording's timestamps with 'mcap info'; rocas compares runs of at "
-                f"most {MAX_SPAN_S / 86400:g} days",
-            )
+    def span_error(side: int) -> None:
+        lo, hi = first[side], last[side]
+        raise RecordingError(
+            f"{recs[side].path}: log times span {(hi - lo) / 86400e9:.4g} days "
+            f"({lo} to {hi} ns): a clock that wrapped past 2^64 ns or a corrupted timestamp, "
+            "not one drive",
+            "check the recording's timestamps with 'mcap info'; rocas compares runs of at "
+            f"most {MAX_SPAN_S / 86400:g} days",
+        )
 
     def bin_of(side: int, t_aligned: int) -> int:
         b = math.floor((t_aligned - origin) / bin_ns + 0.5)
@@ -593,20 +585,38 @@ def _one_pass(
     unflushed = {key: unflush(period, flush)
                  for key, (period, flush) in alignment.flush_plan().items()}
 
-    def head(side: int) -> tuple[_Streamed | None, float]:
-        """The side's next message and its bin (inf at the end)."""
+    # per side: topic -> [offset to the accident's clock, last payload, its aligned time,
+    # aligned times since t = 0] (one look-up a message)
+    per_topic: tuple[dict[str, list[Any]], dict[str, list[Any]]] = ({}, {})
+
+    def topic_state(side: int, topic: str) -> list[Any]:
+        st = per_topic[side][topic] = [alignment.offset_ns(topic, side), None, 0, array("q")]
+        times[side][topic] = st[3]
+        return st
+
+    def head(side: int) -> tuple[_Streamed | None, float, int]:
+        """The side's next message, its bin (inf at the end) and its aligned time."""
         msg = next(streams[side], None)
         if msg is None:
-            return None, math.inf
-        if unflushed and (at := unflushed.get((side, msg[0].topic))) is not None:
+            return None, math.inf, 0
+        topic = msg[0].topic
+        if unflushed and (at := unflushed.get((side, topic))) is not None:
             msg = (msg[0], at(msg[1]), *msg[2:])
-        t_al = msg[1] + offset_of(side, msg[0].topic)
-        check_span(side, msg[1], t_al)
-        return msg, bin_of(side, t_al)
+        t = msg[1]
+        st = per_topic[side].get(topic) or topic_state(side, topic)
+        t_al = t + st[0]
+        if t < first[side]:
+            first[side] = t
+        if t > last[side]:
+            last[side] = t
+        if last[side] - first[side] > max_span_ns or abs(t_al - origin) > max_span_ns:
+            span_error(side)
+        return msg, bin_of(side, t_al), t_al
 
-    (h0, b0), (h1, b1) = head(0), head(1)
+    (h0, b0, a0), (h1, b1, a1) = head(0), head(1)
     heads: list[_Streamed | None] = [h0, h1]
     head_bins = [b0, b1]
+    head_times = [a0, a1]
     # per side, the ChannelInfos noted so far by id (held here, so that no id is reused)
     noted: tuple[dict[int, ChannelInfo], dict[int, ChannelInfo]] = ({}, {})
     since_flush = 0
@@ -616,28 +626,26 @@ def _one_pass(
         assert msg is not None
         ch, t, payload, decode = msg[0], msg[1], msg[2], msg[3]
         b = int(head_bins[side])
+        t_al = head_times[side]
         if id(ch) not in noted[side]:
             note_channel(side, ch)
             noted[side][id(ch)] = ch
         read[side] += 1
         topic = ch.topic
-        t_al = t + offset_of(side, topic)
+        st = per_topic[side][topic]
         if t < latest[side]:
             disorder_ns[side] = max(disorder_ns[side], latest[side] - t)
         else:
             latest[side] = t
-        prev = last_payload[side].get(topic)
         if b < 0:
             # before the span both files cover: nothing in the other run to compare with
             before[side][topic] = before[side].get(topic, 0) + 1
-        elif prev is not None and prev[0] == payload and abs(t_al - prev[1]) < repeat_ns:
+        elif st[1] == payload and abs(t_al - st[2]) < repeat_ns:
             repeated[side][topic] = repeated[side].get(topic, 0) + 1
         else:
-            last_payload[side][topic] = (payload, t_al)
-            tl = times[side].get(topic)
-            if tl is None:
-                tl = times[side][topic] = array("q")
-            tl.append(t_al - origin)
+            st[1] = payload
+            st[2] = t_al
+            st[3].append(t_al - origin)
             bin_slots = open_bins.get(b)
             if bin_slots is None:
                 bin_slots = open_bins[b] = {}
@@ -646,7 +654,7 @@ def _one_pass(
                 slot = bin_slots[topic] = ([], [])
             slot[side].append((t_al, read[side], ch, payload, decode,
                                _UNDECODED if decode is not None else msg[4]))
-        heads[side], head_bins[side] = head(side)
+        heads[side], head_bins[side], head_times[side] = head(side)
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
