@@ -205,6 +205,17 @@ def _close(stream: Any) -> None:
         close()
 
 
+def _shared_payloads(head_a: _Head, head_b: _Head, topics: list[str]) -> bool:
+    """Whether at least a tenth of the hashed head messages of the two files, on the topics
+    both have, have a byte-identical copy in the other head."""
+    shared = total = 0
+    for t in topics:
+        ha, hb = head_a.topics[t].hashes, head_b.topics[t].hashes
+        total += sum(n for n, _ in ha.values())
+        shared += sum(n for key, (n, _) in ha.items() if key in hb)
+    return total > 0 and 10 * shared >= total
+
+
 def _agreeing(offsets: list[int], width_ns: float) -> list[int]:
     """The largest group of ``offsets`` within ``width_ns`` of each other (the earliest such
     group among equals), sorted."""
@@ -310,7 +321,11 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
                 how = "first messages"
                 offset = _median_int([head_a.topics[t].first_ns - head_b.topics[t].first_ns
                                       for t in shared])
-                best = _best_match(head_a, head_b, shared, offset, bin_s)
+                # the channels whose payloads the two runs share (repeated ones, which cannot
+                # time an offset) are no noisy channels: their content is no better guide
+                noisy_topics = [t for t in shared if not _shared_payloads(head_a, head_b, [t])]
+                best = (_best_match(head_a, head_b, noisy_topics, offset, bin_s)
+                        if noisy_topics else None)
                 if best is not None:
                     how, offset = "best match of content", best
             else:
@@ -405,6 +420,8 @@ def _unflush(th: _TopicHead, period_ns: int, flush_ns: int) -> None:
 
 #: How far from the first-message offset the best match of content is looked for [s].
 MATCH_RANGE_S = 3.0
+#: Head messages per topic whose content the best match compares.
+MATCH_MESSAGES = 120
 #: The best match of content replaces the first-message offset only when its cost is below this
 #: fraction of that offset's cost.
 MATCH_GAIN = 0.5
@@ -416,7 +433,7 @@ def _signals(th: _TopicHead, base: int
     leaves) of the messages that decode, for those with the most common numbers of them
     (k + m >= 1; bools count as integers, strings and bytes are left out)."""
     rows: list[tuple[int, np.ndarray, np.ndarray]] = []
-    for t, payload, decode in th.kept:
+    for t, payload, decode in th.kept[:MATCH_MESSAGES]:
         try:
             message = decode(payload)
         except Exception:  # noqa: BLE001 - a foreign file can hold anything
