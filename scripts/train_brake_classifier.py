@@ -6,7 +6,8 @@ The data are synthetic front-camera views built with the same rasteriser the ADS
 (:func:`rocas.ads.classifier.camera_view`), with objects at any heading (along the road,
 crossing, turning) and some close beside the path. Ground truth says "brake" when an object's
 footprint reaches into the ego's corridor within a stopping distance; a large object beside the
-corridor (a truck waited next to, a car being passed) looks big but is not a reason to brake. Like real annotation campaigns, the labels carry
+corridor (a truck waited next to, a car being passed) looks big but is not a reason to brake.
+Like real annotation campaigns, the labels carry
 a bias: annotators also marked red objects ahead (which look like brake lights) as braking, up
 to a longer distance. The learned model inherits it: its output rises for red objects.
 """

@@ -12,7 +12,6 @@ import artefacts as A
 import pytest
 import real_logs
 
-
 #: name -> xfail reason (None: right today)
 FAST = {
     "turtle_tf:noise#0": None,

@@ -142,7 +142,7 @@ def test_the_alpha_beta_trackers_lag_is_undone_and_its_coasted_frames_found():
     tracker = AlphaBetaTracker(position_gain=0.6, velocity_gain=0.1, hidden_frames=1)
     idx, xs, vs = _alpha_beta(z, {20, 21}, 0.6, 0.1, dt)
     rows = [(t[k], 7, x[0], x[1], 0.0, v[0], v[1], 4.6, 1.9, 1.5, 5, 3)
-            for k, x, v in zip(idx, xs, vs)]
+            for k, x, v in zip(idx, xs, vs, strict=True)]
     d = _detections(rows, ["red"] * len(rows))
     order = np.arange(len(rows))
     assert np.abs(xs - z[idx]).max() > 0.3           # the published track lags the car
