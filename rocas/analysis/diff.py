@@ -486,11 +486,12 @@ def diff(
     for topic, s in res.series.items():
         cps = detect(s.mdr, s.times_s, cfg)
         t_star[topic] = t_after[topic] = cps.first_s
-        if cps.first_s is None and topic != ctrl:
+        if not cps.times_s and topic != ctrl:
             # no change point, but the runs start alike and then differ well above the
             # channel's noise: it departed at its first differing bin (its baseline holds the
             # departure), which the window can then see; a pair noisy from its first bin on
-            # (another stack's sensors) is left alone
+            # (another stack's sensors) is left alone. (A channel whose only change points
+            # fall, the runs converging, has no departure: t* stays undefined.)
             nz = np.flatnonzero(s.mdr > 0)
             base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
             if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
