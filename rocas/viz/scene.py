@@ -435,6 +435,11 @@ def _polylines(msg: Any, path: tuple[str, ...]) -> tuple[list[str], list[np.ndar
     return owners, lines
 
 
+#: Most channels whose fields a view plots; a recording with more (one channel per object or
+#: per sensor cell) would take gigabytes and show nothing readable.
+MAX_CHANNELS_SHOWN = 500
+
+
 def load_execution(path: str | os.PathLike[str]) -> Execution:
     """Read a recording once and keep what the scene and the signals need."""
     from rocas.recording.reader import open_recording
@@ -442,6 +447,7 @@ def load_execution(path: str | os.PathLike[str]) -> Execution:
     rec = open_recording(path)
     ex = Execution(Path(path))
     readers: dict[str, _ChannelReader | None] = {}
+    left_out: set[str] = set()
     json_rows: dict[str, tuple[list[float], list[dict[str, float]]]] = {}
     pose_topic: str | None = None
     obstacle_topic: str | None = None
@@ -466,6 +472,11 @@ def load_execution(path: str | os.PathLike[str]) -> Execution:
             continue
         r = readers.get(topic, False)
         if r is False:
+            if len(readers) >= MAX_CHANNELS_SHOWN:
+                # past what a viewer can show usefully: this channel is left out (and said)
+                left_out.add(topic)
+                readers[topic] = None
+                continue
             try:
                 r = _ChannelReader(topic, m.channel.schema_name, msg)
             except Exception:  # a descriptor rocas cannot walk: show nothing from it
@@ -503,6 +514,11 @@ def load_execution(path: str | os.PathLike[str]) -> Execution:
     ex.t0_ns = t0 or 0
     ex.duration_s = (last - (t0 or 0)) * 1e-9
     ex.warnings = rec.report.warnings(Path(path).name)
+    if left_out:
+        ex.warnings.append(
+            f"{Path(path).name}: {len(left_out)} of {len(readers)} channels are not shown: "
+            f"the view plots the first {MAX_CHANNELS_SHOWN} channels that publish (rocas diff "
+            "and rocas cmg read them all)")
     if ego_t:
         a = np.asarray(ego_xyh, dtype=np.float64)
         order = np.argsort(np.asarray(ego_t), kind="stable")

@@ -193,3 +193,14 @@ def test_a_light_label_keeps_off_the_road_around_the_light(name):
     items = [LabelItem(f"{tl['id']}: yellow", tuple(tl["position"]), 1.2) for tl in lights]
     for x0, y0, x1, y1 in label_rects(items, place_labels(items, obstacles=road)):
         assert not any(x0 < b[2] and b[0] < x1 and y0 < b[3] and b[1] < y1 for b in road)
+
+
+def test_a_recording_with_too_many_channels_shows_the_first_ones_and_says_so(tmp_path,
+                                                                               monkeypatch):
+    import rocas.viz.scene as scene
+
+    pair = make_pair(tmp_path)
+    monkeypatch.setattr(scene, "MAX_CHANNELS_SHOWN", 3)
+    ex = scene.load_execution(pair.accident)
+    assert len(ex.channels) <= 3
+    assert any("channels are not shown" in w and "first 3 channels" in w for w in ex.warnings)
