@@ -26,7 +26,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rocas.errors import InputError
-from rocas.viz.scene import BACKGROUND_RGB, TIMELINE, Execution, load_execution, log_scene
+from rocas.viz.scene import (
+    BACKGROUND_RGB,
+    MAX_CHANNELS_SHOWN,
+    TIMELINE,
+    Execution,
+    load_execution,
+    log_scene,
+)
 from rocas.viz.signals import log_signals
 from rocas.viz.stream import rrd_recording
 
@@ -312,6 +319,16 @@ def write_recording_rrd(
     topics = tuple(sorted(t for t, st in scan.report.channel_stats.items() if st.messages))
     if not topics and ex.world is None:
         raise InputError(f"{recording}: nothing to show (no readable message and no world)")
+    if len(topics) > MAX_CHANNELS_SHOWN:
+        # Rerun's importer would make an entity of every channel: gigabytes for tens of
+        # thousands of them, and nothing readable; rocas's own plots stay (the first ones)
+        ex.warnings.append(
+            f"{Path(recording).name}: {len(topics)} channels are more than the view imports "
+            f"({MAX_CHANNELS_SHOWN}); the recording is shown through rocas's own plots of its "
+            "first channels only, not Rerun's MCAP importer")
+        topics, own_plots = (), True
+    else:
+        own_plots = False
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="rocas-view-") as tmp:
@@ -324,7 +341,7 @@ def write_recording_rrd(
             source = Path(tmp) / "recording.mcap"
             write_mcap(scan, source)  # type: ignore[arg-type]
         with rrd_recording(path, recording_blueprint(name, ex, topics), kind="view") as rec:
-            log_execution(rec, name, ex, channels=False)
+            log_execution(rec, name, ex, channels=own_plots)
             if topics:
                 rec.log_file_from_path(source)
     return ex, topics

@@ -204,3 +204,15 @@ def test_a_recording_with_too_many_channels_shows_the_first_ones_and_says_so(tmp
     ex = scene.load_execution(pair.accident)
     assert len(ex.channels) <= 3
     assert any("channels are not shown" in w and "first 3 channels" in w for w in ex.warnings)
+
+
+def test_a_view_of_too_many_channels_does_not_import_them_all(tmp_path, monkeypatch):
+    import rocas.viz.analysis as analysis
+
+    pair = make_pair(tmp_path)
+    monkeypatch.setattr(analysis, "MAX_CHANNELS_SHOWN", 3)
+    ex, topics = analysis.write_recording_rrd(tmp_path / "many.rrd", pair.accident)
+    assert topics == ()
+    assert any("more than the view imports (3)" in w for w in ex.warnings)
+    e, _ = read_rrd(tmp_path / "many.rrd")
+    assert not any(path.startswith("/sensing") or path.startswith("/fusion") for path in e)
