@@ -14,7 +14,11 @@ Every file cut keeps the deviation and a second after it inside both files.
 Prints the clean pairs' answers, a table per artefact class and the totals, the failing cases'
 names and the time; ``--failures FILE`` writes the failing cases' names (one a line) to FILE.
 
+With ``--noise SIGMA`` both sides also carry independent noise on every float (issue 36: two
+real runs never agree bit for bit), the artefact on top of it.
+
     python tests/benchmarks/bench_artefacts.py [--pairs demo_a01,a05] [--failures FILE] [-v]
+        [--noise 0.03]
 """
 
 from __future__ import annotations
@@ -49,6 +53,10 @@ def main() -> None:
     ap.add_argument("--pairs", help="comma-separated pair names (default: all)")
     ap.add_argument("--failures", help="write the failing cases' names to this file")
     ap.add_argument("-v", "--verbose", action="store_true", help="print every case as it is judged")
+    ap.add_argument("--noise", type=float, default=0.0, metavar="SIGMA",
+                    help="also put independent gaussian noise of SIGMA on every float of both "
+                    "sides (seeded; the artefacts with their first seed only), as two real runs "
+                    "of the same drive differ")
     args = ap.parse_args()
     pairs = load_pairs(args.pairs.split(",") if args.pairs else None)
 
@@ -59,11 +67,20 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-artefacts-") as tmp:
         for p in pairs:
             acc, ref = ROOT / p["accident"], ROOT / p["reference"]
+            base_a: tuple = ()
+            base_b: tuple = ()
+            if args.noise:
+                base_a, base_b = (A.noise(args.noise, seed=1),), (A.noise(args.noise, seed=2),)
+                noisy_a, noisy_b = Path(tmp) / "noisy-accident.mcap", Path(tmp) / "noisy-reference.mcap"
+                A.rewrite(acc, noisy_a, *base_a)
+                A.rewrite(ref, noisy_b, *base_b)
+                acc, ref = noisy_a, noisy_b
             clean = A.judge(acc, ref, p["truth"])
             print(f"  {p['name']:<10} truth {p['truth']:<11} -> {clean.verdict} ({clean.detail})")
             span = min(A.span_s(acc), A.span_s(ref))
             arts = A.logging_artefacts(deviating_topic=p["deviating_topic"], other_topic=p["other_topic"],
-                                       span_s=span, deviation_s=p["deviation_s"])
+                                       span_s=span, deviation_s=p["deviation_s"],
+                                       seeds=(0,) if args.noise else (0, 1))
             for art in arts:
                 for side in ("reference", "accident"):
                     out = Path(tmp) / f"{p['name']}-{side}.mcap"
