@@ -328,29 +328,33 @@ def log_cmg(rec: Any, result: DiffResult, prefix: str = "diff") -> CmgDrawing:
 
 
 def report_markdown(result: DiffResult) -> str:
-    """The verdict of a diff as markdown."""
+    """The verdict of a diff as markdown. Every name from data (channels, modules, files) and
+    every line made from them is escaped (:func:`rocas._text.markdown_text`): no Markdown or
+    HTML in a name acts."""
+    from rocas._text import markdown_text as md
+
     p = result.pinpoint
     lines = ["# Differential analysis", ""]
     if p.deviating_module:
-        lines.append(f"**Initial deviating module: `{p.deviating_module}`**")
+        lines.append(f"**Initial deviating module: {md(p.deviating_module)}**")
         lines.append("")
-        lines.append("Walk: " + " → ".join(f"`{n}`" for n in p.path))
+        lines.append("Walk: " + " → ".join(md(n) for n in p.path))
     else:
         lines.append("**No deviating module found** (no module reachable from the control "
                      "channel has a change point).")
     if p.fallback:
-        lines += ["", f"Note: {p.fallback}."]
+        lines += ["", f"Note: {md(p.fallback)}."]
     e = result.entries
     if e is not None and e.deviating_module != p.deviating_module:
         from rocas.analysis.entries import entries_text
 
         entered = {c.topic: c.entered_s for c in result.channels if c.entered_s is not None}
-        lines += ["", f"Note: {entries_text(entered, e.deviating_module)}."]
+        lines += ["", f"Note: {md(entries_text(entered, e.deviating_module))}."]
     notes = result.comparison_notes()
     if notes or result.warnings:
         lines += ["", "## How the recordings were compared", ""]
-        lines += [f"- {n}" for n in notes]
-        lines += [f"- Warning: {w}" for w in result.warnings]
+        lines += [f"- {md(n)}" for n in notes]
+        lines += [f"- Warning: {md(w)}" for w in result.warnings]
     lines += ["", "| channel | writers | t* [s] | MDR before | MDR after |", "|---|---|---|---|---|"]
     for c in result.channels:
         t = "—" if c.change_point_s is None else f"{c.change_point_s:.2f}"
@@ -358,10 +362,11 @@ def report_markdown(result: DiffResult) -> str:
             t += f" (converges at {c.change_points.converges_s[0]:.2f})"
         before = "—" if c.mdr_before is None else f"{c.mdr_before:.3f}"
         after = "—" if c.mdr_after is None else f"{c.mdr_after:.3f}"
-        lines.append(f"| `{c.topic}` | {', '.join(c.writers) or '—'} | {t} | {before} | {after} |")
+        lines.append(f"| {md(c.topic)} | {md(', '.join(c.writers)) or '—'} | {t} | {before} "
+                     f"| {after} |")
     if p.exclusions:
         lines += ["", "## Excluded modules", ""]
-        lines += [f"- `{m}`: {why}" for m, why in sorted(p.exclusions.items())]
+        lines += [f"- {md(m)}: {md(why)}" for m, why in sorted(p.exclusions.items())]
     return "\n".join(lines) + "\n"
 
 

@@ -216,3 +216,15 @@ def test_a_view_of_too_many_channels_does_not_import_them_all(tmp_path, monkeypa
     assert any("more than the view imports (3)" in w for w in ex.warnings)
     e, _ = read_rrd(tmp_path / "many.rrd")
     assert not any(path.startswith("/sensing") or path.startswith("/fusion") for path in e)
+
+
+def test_the_diff_verdict_markdown_escapes_names_from_data(tmp_path):
+    from hostile import hostile_pair
+
+    from rocas.analysis.diff import diff
+    from rocas.viz.diff import report_markdown
+
+    acc, ref = hostile_pair(tmp_path)
+    text = report_markdown(diff(acc, ref))
+    assert "\x1b" not in text and "\r" not in text
+    assert "`/fusion/" not in text  # names are escaped text, not code spans that act
