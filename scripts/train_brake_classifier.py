@@ -1,9 +1,9 @@
-"""Train the front-camera brake classifier shipped as rocas/ads/brake_classifier.npz.
+"""Train the front-camera brake classifier shipped as rocas/stacks/ads/brake_classifier.npz.
 
 Reproducible: ``python scripts/train_brake_classifier.py --seed 0`` writes the same weights.
 
 The data are synthetic front-camera views built with the same rasteriser the ADS uses
-(:func:`rocas.ads.classifier.camera_view`), with objects at any heading (along the road,
+(:func:`rocas.stacks.ads.classifier.camera_view`), with objects at any heading (along the road,
 crossing, turning) and some close beside the path. Ground truth says "brake" when an object's
 footprint reaches into the ego's corridor within a stopping distance; a large object beside the
 corridor (a truck waited next to, a car being passed) looks big but is not a reason to brake.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.ads.classifier import (
+from rocas.stacks.ads.classifier import (
     CAMERA_HFOV_RAD,
     FEATURES,
     brake_worthy,
@@ -28,7 +28,7 @@ from rocas.ads.classifier import (
 )
 from rocas.scenarios.model import COLORS
 
-OUT = Path(__file__).resolve().parents[1] / "rocas" / "ads" / "brake_classifier.npz"
+OUT = Path(__file__).resolve().parents[1] / "rocas" / "stacks" / "ads" / "brake_classifier.npz"
 HIDDEN = 64
 
 

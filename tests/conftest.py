@@ -38,7 +38,7 @@ def rocas():
 @pytest.fixture(scope="session")
 def red_truck_recording(tmp_path_factory):
     """A 9 s recording of the roundabout red-truck example (hard brake at ~6.8 s)."""
-    from rocas.ads.run import simulate
+    from rocas.stacks.ads.run import simulate
     from rocas.scenarios import load_example
 
     path = tmp_path_factory.mktemp("red_truck") / "roundabout.mcap"

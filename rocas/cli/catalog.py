@@ -241,7 +241,7 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
 
 def _record_variant(v, out_dir: Path) -> None:  # noqa: ANN001
     """The variant's accident recording, as ``rocas catalog record`` writes an entry's."""
-    from rocas.ads.run import simulate
+    from rocas.stacks.ads.run import simulate
     from rocas.scenarios.catalog import accident_matches
 
     res = simulate(v.scenario, output=out_dir / f"{v.name}.mcap")

@@ -19,7 +19,7 @@ def parse_set_options(assignments: list[str], command: str) -> dict[str, float]:
     Raises:
         UsageError: naming the option, with the closest parameter name or where to look.
     """
-    from rocas.ads.params import parse_assignment
+    from rocas.stacks.ads.params import parse_assignment
     from rocas.errors import ScenarioError
 
     try:
@@ -39,7 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, env: Env) -> int:
     from rich.table import Table
 
-    from rocas.ads.params import MODULES, parameters
+    from rocas.stacks.ads.params import MODULES, parameters
 
     if args.module is not None and args.module not in MODULES:
         raise UsageError(f"unknown module {args.module!r}", f"choose from {', '.join(MODULES)}")

@@ -35,7 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, env: Env) -> int:
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from rocas.ads.run import simulate
+    from rocas.stacks.ads.run import simulate
     from rocas.cli.params import parse_set_options
     from rocas.scenarios import resolve_scenario
 

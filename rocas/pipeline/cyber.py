@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from rocas.ads.params import BRAKING_LIMITS, MODULES, PACE_LIMITS, SENSING_LIMITS, parameters
+from rocas.stacks.ads.params import BRAKING_LIMITS, MODULES, PACE_LIMITS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.search.space import MutationSpace, Variable
 
@@ -12,10 +12,10 @@ from rocas.search.space import MutationSpace, Variable
 def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "ads"
                 ) -> MutationSpace:
     """The parameters of ``module`` (all modules when None) as a mutation space, without the
-    :data:`~rocas.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
-    with the :data:`~rocas.ads.params.SENSING_LIMITS` free to grow only (from their current
+    :data:`~rocas.stacks.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
+    with the :data:`~rocas.stacks.ads.params.SENSING_LIMITS` free to grow only (from their current
     value to their upper bound: a "fix" that senses less hides the accident too), and the
-    :data:`~rocas.ads.params.PACE_LIMITS` free to fall only (a "fix" that drives faster wins a
+    :data:`~rocas.stacks.ads.params.PACE_LIMITS` free to fall only (a "fix" that drives faster wins a
     race instead of removing the cause).
 
     Args:

@@ -140,7 +140,7 @@ def batches_of(tasks: list[VariantTask], batch_size: int, workers: int) -> list[
 def prepare_worker() -> None:
     """What a worker imports before its first task (see ``warm_up`` of
     :class:`~rocas.search.executor.LocalExecutor`): the simulation with the built-in ADS."""
-    import rocas.ads.run  # noqa: F401
+    import rocas.stacks.ads.run  # noqa: F401
     import rocas.stacks.rollout  # noqa: F401
 
 

@@ -76,7 +76,7 @@ class Run:
         assert self.scenario is not None
         ego = self.scenario.ego
         if ego.stack == "ads":
-            from rocas.ads.params import ParamSet
+            from rocas.stacks.ads.params import ParamSet
 
             current = dict(ParamSet(ego.overrides))
         else:  # cyber_space takes the defaults of what is not overridden

@@ -3,7 +3,7 @@
 Algorithm 1 names the deviating module from the difference between the accident and an
 accident-free reference. Module substitution asks the question the other way round, without
 any reference: replay the accident scenario with one module's output replaced by ground truth
-(:mod:`rocas.ads.oracle`) and see whether the accident disappears. The most upstream module, in
+(:mod:`rocas.stacks.ads.oracle`) and see whether the accident disappears. The most upstream module, in
 data-flow order, whose substitution alone removes the accident is the substitution's answer.
 All runs (the ADS as it is, each substitutable module alone, all of them together) are one
 batch of simulations.
@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from rocas.ads.oracle import SUBSTITUTABLE
-from rocas.ads.run import ParamsLike, simulate_batch
+from rocas.stacks.ads.oracle import SUBSTITUTABLE
+from rocas.stacks.ads.run import ParamsLike, simulate_batch
 from rocas.scenarios.model import Scenario
 from rocas.sim.oracles import Outcome
 

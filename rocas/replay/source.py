@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from rocas.ads.topics import (
+from rocas.stacks.ads.topics import (
     EGO_METADATA,
     RUN_METADATA,
     TOPIC_OBSTACLES,

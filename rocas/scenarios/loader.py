@@ -316,7 +316,7 @@ def _actor(ctx: _Ctx, d: Any, key: str, lanes: Mapping[str, Lane]) -> Actor:
 
 def _params(ctx: _Ctx, d: Any, key: str, stack: str = "ads") -> tuple[tuple[str, float], ...]:
     if stack == "ads":
-        from rocas.ads.params import PARAMETERS
+        from rocas.stacks.ads.params import PARAMETERS
     else:  # another registered stack's inventory (resolved lazily, like the ADS's)
         from rocas.errors import UsageError
         from rocas.stacks.registry import get_stack

@@ -134,7 +134,7 @@ class VariantReport:
 # --- drawing one variant ----------------------------------------------------------------------
 
 def _default_cruise_mps() -> float:
-    from rocas.ads.params import PARAMETERS
+    from rocas.stacks.ads.params import PARAMETERS
 
     return PARAMETERS["planning.cruise_speed_mps"].default
 
@@ -265,7 +265,7 @@ def _batch_key(s: Scenario) -> tuple[object, ...]:
 def _simulate_groups(runs: Sequence[tuple[Scenario, Mapping[str, float] | None]]) -> list[Any]:
     """Simulate (scenario, params) runs, batching those of one structure; returns per run
     (outcome, ego trace (T + 1, 5), times (T + 1,))."""
-    from rocas.ads.run import simulate_batch
+    from rocas.stacks.ads.run import simulate_batch
 
     groups: dict[tuple[object, ...], list[int]] = {}
     for i, (s, _) in enumerate(runs):

@@ -9,7 +9,7 @@ The stack is the caller's: a :data:`rocas.sim.protocol.StackFactory` that builds
 :class:`rocas.sim.protocol.StackRun` for the compiled world. Per step the stack observes and
 decides, the ego integrates its actuation, the actors move, the oracles judge. Both functions
 are pure functions of their inputs: (scenario, stack, seed) -> result. The built-in ADS is wired
-in by :mod:`rocas.ads.run`, whose ``simulate``/``simulate_batch`` take parameter overrides.
+in by :mod:`rocas.stacks.ads.run`, whose ``simulate``/``simulate_batch`` take parameter overrides.
 """
 
 from __future__ import annotations

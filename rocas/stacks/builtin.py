@@ -1,7 +1,7 @@
-"""The built-in ADS (:mod:`rocas.ads`) as a registered stack (``ads``).
+"""The built-in ADS (:mod:`rocas.stacks.ads`) as a registered stack (``ads``).
 
 Its inventory and channels are the ADS's own; :meth:`AdsStackAdapter.build` drives the same
-:class:`rocas.ads.stack.AdsStack` the simulator's engine does, through the stack protocol.
+:class:`rocas.stacks.ads.stack.AdsStack` the simulator's engine does, through the stack protocol.
 """
 
 from __future__ import annotations
@@ -14,14 +14,14 @@ import numpy as np
 from rocas.stacks.base import AlphaBetaTracker, ChannelSpec, ParamSpec
 
 if TYPE_CHECKING:
-    from rocas.ads.run import AdsRun
+    from rocas.stacks.ads.run import AdsRun
 
 
 class AdsStackAdapter:
     name = "ads"
 
     def __init__(self) -> None:
-        from rocas.ads import params, topics
+        from rocas.stacks.ads import params, topics
 
         self.modules: tuple[str, ...] = params.MODULES
         self.parameters: tuple[ParamSpec, ...] = tuple(params.parameters())  # ads Param is ParamSpec
@@ -30,7 +30,7 @@ class AdsStackAdapter:
     def tracker(self, params: Mapping[str, float]) -> AlphaBetaTracker:
         """The perception module's alpha-beta tracker with ``params`` (full names; missing
         ones at their defaults)."""
-        from rocas.ads.perception import POSITION_GAIN
+        from rocas.stacks.ads.perception import POSITION_GAIN
 
         def value(name: str) -> float:
             spec = next(p for p in self.parameters if p.full_name == name)
@@ -40,7 +40,7 @@ class AdsStackAdapter:
                                 int(value("perception.track_min_hits")) - 1)
 
     def build(self, world: object, params: Mapping[str, np.ndarray]) -> AdsRun:
-        from rocas.ads.run import AdsRun  # the one the simulator's engine drives
+        from rocas.stacks.ads.run import AdsRun  # the one the simulator's engine drives
 
         return AdsRun(world, params)  # type: ignore[arg-type]
 

@@ -147,10 +147,10 @@ def simulate(scenario: Scenario, params: Mapping[str, float] | None = None,
              seed: int | None = None, *, output: str | os.PathLike[str] | None = None
              ) -> SingleRun:
     """One run with the stack the scenario names (``scenario.ego.stack``): the built-in ADS
-    through :func:`rocas.ads.run.simulate`, any other registered stack through
+    through :func:`rocas.stacks.ads.run.simulate`, any other registered stack through
     :func:`rollout`; ``params`` go on top of the scenario's own overrides."""
     if scenario.ego.stack == "ads":
-        from rocas.ads.run import simulate as simulate_ads
+        from rocas.stacks.ads.run import simulate as simulate_ads
 
         r = simulate_ads(scenario, params or None, seed, output=output)
         return SingleRun(r.outcome, r.times, r.ego, r.actors, r.min_gap, r.recording,
@@ -171,7 +171,7 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
                    seeds: Sequence[int], *,
                    outputs: Mapping[int, str | os.PathLike[str]] | None = None) -> Rollout:
     """N variants of one scenario structure with the stack they name (all the same); the
-    built-in ADS through :func:`rocas.ads.run.simulate_batch`. Returns the fields the
+    built-in ADS through :func:`rocas.stacks.ads.run.simulate_batch`. Returns the fields the
     searches read (times, ego, actors, min_gap, outcomes).
 
     ``outputs`` (row -> MCAP file) also records those rows, each the file :func:`simulate`
@@ -183,7 +183,7 @@ def simulate_batch(scenarios: Sequence[Scenario], params: Sequence[Mapping[str, 
                          "batch variants of one scenario only")
     (name,) = stacks
     if name == "ads":
-        from rocas.ads.run import simulate_batch as simulate_batch_ads
+        from rocas.stacks.ads.run import simulate_batch as simulate_batch_ads
 
         r = simulate_batch_ads(list(scenarios), params=[dict(p) for p in params],
                                seeds=list(seeds), outputs=outputs)

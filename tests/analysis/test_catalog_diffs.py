@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
 from rocas.scenarios.catalog import entries
 

@@ -42,7 +42,7 @@ _STATE: dict = {}
 
 def _pairs(workdir: Path) -> list[tuple[Path, Path, bool]]:
     """(accident, reference, catalog?) for every pair; references simulated into ``workdir``."""
-    from rocas.ads.run import simulate
+    from rocas.stacks.ads.run import simulate
     from rocas.scenarios.catalog import entries
 
     out = []

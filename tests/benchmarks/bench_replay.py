@@ -14,7 +14,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.replay import replay
 from rocas.scenarios import load_example
 

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.replay import reconstruct, replay
 from rocas.replay.frames import wrap
 from rocas.scenarios.variants import load_variant

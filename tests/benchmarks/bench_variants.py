@@ -34,7 +34,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.pipeline.analyze import analyze
 from rocas.pipeline.bench import _expected, _found, score
 from rocas.pipeline.config import AnalyzeConfig

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats

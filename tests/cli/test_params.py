@@ -1,7 +1,7 @@
 import io
 import json
 
-from rocas.ads.params import PARAMETERS
+from rocas.stacks.ads.params import PARAMETERS
 from rocas.cli.console import Env
 from rocas.cli.main import main
 

@@ -16,7 +16,7 @@ from fuzz.structural import (
     run_diff,
 )
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.scenarios.catalog import entries
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"

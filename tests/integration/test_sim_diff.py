@@ -2,7 +2,7 @@
 
 import pytest
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.analysis import diff
 from rocas.scenarios import load_example
 

@@ -6,7 +6,7 @@ a race instead of removing the cause)."""
 import numpy as np
 import pytest
 
-from rocas.ads.params import BRAKING_LIMITS, PACE_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
+from rocas.stacks.ads.params import BRAKING_LIMITS, PACE_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.search.space import Mutation

@@ -2,8 +2,8 @@
 
 import pytest
 
-from rocas.ads.oracle import SUBSTITUTABLE
-from rocas.ads.run import simulate_batch
+from rocas.stacks.ads.oracle import SUBSTITUTABLE
+from rocas.stacks.ads.run import simulate_batch
 from rocas.pipeline.substitution import second_opinion
 from rocas.scenarios.catalog import accident_matches, entries, entry
 

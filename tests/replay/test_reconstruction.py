@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import rocas
-from rocas.ads.topics import TOPIC_OBSTACLES, TOPIC_POSE, WORLD_ATTACHMENT
+from rocas.stacks.ads.topics import TOPIC_OBSTACLES, TOPIC_POSE, WORLD_ATTACHMENT
 from rocas.errors import RecordingError
 from rocas.msgs import localization_pb2
 from rocas.recording.writer import RecordingWriter
@@ -57,7 +57,7 @@ def test_world_ego_and_actor_identity(recorded):
 
 def test_actor_trajectories_match_the_ground_truth(recorded):
     """Perception (ego frame) -> world: replayed actors drive where the originals drove."""
-    from rocas.ads.run import simulate
+    from rocas.stacks.ads.run import simulate
 
     rec = recorded("roundabout_red_truck")
     r = reconstruct(rec.path)

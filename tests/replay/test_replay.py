@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.replay import reconstruct, replay
 from rocas.replay.reconstruction import AccidentInfo
 from rocas.replay.run import same_accident, trajectory_error

@@ -115,7 +115,7 @@ def test_bridge_between_pieces_follows_the_detections_not_the_trackers_velocity(
 
 def _alpha_beta(z: np.ndarray, missed: set[int], a: float, b: float, dt: float
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The built-in ADS's tracker on measurements ``z`` (n, 2), as rocas.ads.perception runs
+    """The built-in ADS's tracker on measurements ``z`` (n, 2), as rocas.stacks.ads.perception runs
     it: a new track starts at the measurement at rest, later frames are corrected by gains
     ``a`` (position) and ``b`` (velocity), missed frames coast. Returns the published frames
     (the first update on: one hidden frame) as (indices, positions, velocities)."""
@@ -153,7 +153,7 @@ def test_the_alpha_beta_trackers_lag_is_undone_and_its_coasted_frames_found():
 
 
 def test_the_built_in_stack_declares_its_tracker_with_the_recorded_parameters():
-    from rocas.ads.perception import POSITION_GAIN
+    from rocas.stacks.ads.perception import POSITION_GAIN
     from rocas.stacks.registry import get_stack
 
     declare = get_stack("ads").tracker

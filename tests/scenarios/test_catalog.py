@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rocas.ads.params import PARAMETERS
-from rocas.ads.run import simulate_batch
+from rocas.stacks.ads.params import PARAMETERS
+from rocas.stacks.ads.run import simulate_batch
 from rocas.recording.reader import open_recording
 from rocas.scenarios.catalog import (
     PRE_ACCIDENT_MARGIN_S,

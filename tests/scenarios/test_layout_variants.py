@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from rocas.ads.params import PARAMETERS
-from rocas.ads.run import simulate_batch
+from rocas.stacks.ads.params import PARAMETERS
+from rocas.stacks.ads.run import simulate_batch
 from rocas.scenarios.catalog import accident_matches, fix_holds, mutate
 from rocas.scenarios.variants import load_variant, source_entry
 

@@ -95,7 +95,7 @@ def test_bad_toml_and_missing_file(tmp_path):
 
 
 def test_roundabout_is_expressible_and_a9_depends_on_the_brake_threshold():
-    from rocas.ads.run import simulate_batch
+    from rocas.stacks.ads.run import simulate_batch
 
     s = load_example("roundabout_red_truck")
     ring = ["ring_se", "ring_ne", "ring_nw", "ring_sw"]

@@ -12,7 +12,7 @@ import tomllib
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rocas.ads.params import PARAMETERS, parse_assignment, validate_param
+from rocas.stacks.ads.params import PARAMETERS, parse_assignment, validate_param
 from rocas.errors import ScenarioError
 from rocas.scenarios import example_names, load_example, scenario_from_dict, scenario_to_dict
 from rocas.scenarios.catalog import entries

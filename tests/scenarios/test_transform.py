@@ -127,7 +127,7 @@ _CLASSIFIER_YAW = pytest.mark.xfail(strict=True, reason="the brake classifier is
 @pytest.mark.parametrize("type_id", [pytest.param(i, marks=_CLASSIFIER_YAW) if i in ("A6", "A9")
                                      else i for i in IDS])
 def test_a_rotated_catalog_accident_is_the_same_accident_within_a_tick(type_id):
-    from rocas.ads.run import simulate_batch
+    from rocas.stacks.ads.run import simulate_batch
 
     e = entry(type_id)
     turned = transform_scenario(e.scenario, PlaneTransform.rotation(math.radians(90.0),

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rocas.ads.run import simulate_batch
+from rocas.stacks.ads.run import simulate_batch
 from rocas.errors import UsageError
 from rocas.scenarios.catalog import accident_matches, entry, fix_holds
 from rocas.scenarios.loader import scenario_to_dict

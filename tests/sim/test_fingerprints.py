@@ -1,6 +1,6 @@
 """The simulator's output is bit-identical on every machine.
 
-Each catalog scenario's fingerprint (rocas.ads.fingerprint: trajectories, oracle outcomes,
+Each catalog scenario's fingerprint (rocas.stacks.ads.fingerprint: trajectories, oracle outcomes,
 module output digests and, for the accidents, every published message) is stored in
 fingerprints.json. A change of arithmetic that moves any bit fails here; regenerate with
 ``python tests/sim/test_fingerprints.py --update`` and regenerate the shipped recordings
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from rocas.ads.fingerprint import run_fingerprint
+from rocas.stacks.ads.fingerprint import run_fingerprint
 from rocas.scenarios.catalog import entries
 
 STORED = Path(__file__).with_name("fingerprints.json")
@@ -47,7 +47,7 @@ def test_catalog_fingerprints_match_the_stored_ones(type_id):
 _CHILD = """
 import json, sys
 from rocas.scenarios.catalog import entry
-from rocas.ads.fingerprint import run_fingerprint
+from rocas.stacks.ads.fingerprint import run_fingerprint
 print(json.dumps([run_fingerprint(entry(t).scenario) for t in sys.argv[1:]]))
 """
 

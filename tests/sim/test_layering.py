@@ -1,4 +1,4 @@
-"""The simulator knows worlds, not stacks: no module under rocas/sim imports rocas.ads."""
+"""The simulator knows worlds, not stacks: no module under rocas/sim imports rocas.stacks.ads."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ from pathlib import Path
 import rocas.sim
 
 SIM_DIR = Path(rocas.sim.__file__).parent
-FORBIDDEN = "rocas.ads"
+FORBIDDEN = "rocas.stacks.ads"
 
 
 def _imported_modules(tree: ast.AST) -> list[tuple[int, str]]:
     """(line, module) of every import in ``tree``, also those inside functions; ``from rocas
-    import ads`` counts as ``rocas.ads``."""
+    import ads`` counts as ``rocas.stacks.ads``."""
     found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
@@ -41,12 +41,12 @@ def test_no_module_of_the_simulator_imports_the_ads():
 
 def test_importing_the_simulator_loads_no_stack():
     # also through what it imports (scenarios, recording): a fresh interpreter imports every
-    # module of rocas.sim and lists the rocas.ads modules that came with them
+    # module of rocas.sim and lists the rocas.stacks.ads modules that came with them
     child = (
         "import importlib, pkgutil, sys, rocas.sim\n"
         "names = [m.name for m in pkgutil.iter_modules(rocas.sim.__path__)]\n"
         "for n in names: importlib.import_module('rocas.sim.' + n)\n"
-        "print(len(names), sorted(m for m in sys.modules if m.split('.')[:2] == ['rocas', 'ads']))"
+        "print(len(names), sorted(m for m in sys.modules if m.split('.')[:3] == ['rocas', 'stacks', 'ads']))"
     )
     out = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True,
                          check=True).stdout.split(maxsplit=1)
@@ -56,11 +56,11 @@ def test_importing_the_simulator_loads_no_stack():
 
 def test_the_check_sees_every_form_of_import():
     source = """
-import rocas.ads.params
-from rocas.ads.stack import AdsStack
-from rocas import ads
+import rocas.stacks.ads.params
+from rocas.stacks.ads.stack import AdsStack
+from rocas.stacks import ads
 def lazy():
-    from rocas.ads import planning
+    from rocas.stacks.ads import planning
 import rocas.adsx, rocas.sim.world
 from rocas.sim import world
 """

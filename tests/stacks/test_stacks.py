@@ -64,7 +64,7 @@ def test_a_lav_variant_is_the_same_whatever_the_batch():
 
 
 def test_the_built_in_ads_through_the_protocol_drives_as_the_engine_does():
-    from rocas.ads.run import simulate_batch
+    from rocas.stacks.ads.run import simulate_batch
 
     s = _short(entry("A1").scenario, 3.0)
     ours = rollout_batch(registry.get_stack("ads"), [s], None, [0])

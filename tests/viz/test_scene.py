@@ -7,7 +7,7 @@ import pytest
 from foreign_stack import make_pair
 from rrd import read_rrd
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.recording.reader import open_recording
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats

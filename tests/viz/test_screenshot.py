@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from foreign_stack import make_pair
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.analysis import diff
 from rocas.scenarios.loader import load_example
 from rocas.viz.analysis import write_analysis_rrd

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from rrd import read_rrd
 
-from rocas.ads.run import simulate
+from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats

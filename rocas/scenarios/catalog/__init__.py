@@ -145,7 +145,7 @@ def _fail(source: str, key: str, reason: str) -> ScenarioError:
 def _inventory(stack: str) -> tuple[tuple[str, ...], set[str]]:
     """The modules a ground truth may name and the parameters it may set, per stack."""
     if stack == "ads":
-        from rocas.ads.params import PARAMETERS
+        from rocas.stacks.ads.params import PARAMETERS
 
         return MODULES, set(PARAMETERS)
     from rocas.stacks.registry import get_stack

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.ads import classifier
-from rocas.ads.localization import LocalizationOutput
+from rocas.stacks.ads import classifier
+from rocas.stacks.ads.localization import LocalizationOutput
 from rocas.sim import rng
 from rocas.sim.geometry import clip, segments_blocked_by_edge, wrap_angle
 from rocas.sim.world import (

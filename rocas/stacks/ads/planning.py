@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.ads.localization import ChassisOutput, LocalizationOutput
-from rocas.ads.perception import (
+from rocas.stacks.ads.localization import ChassisOutput, LocalizationOutput
+from rocas.stacks.ads.perception import (
     T_BICYCLE,
     T_PEDESTRIAN,
     TL_RED,
@@ -20,7 +20,7 @@ from rocas.ads.perception import (
     TL_YELLOW,
     PerceptionOutput,
 )
-from rocas.ads.prediction import PredictionOutput
+from rocas.stacks.ads.prediction import PredictionOutput
 from rocas.sim.geometry import box_gap, clip, wrap_angle
 from rocas.sim.world import REF_SPACING_M, BatchWorld, project_on_reference, reference_at
 

@@ -7,8 +7,8 @@ changes the fingerprint of some module's published output over the run.
 
 import numpy as np
 
-from rocas.ads.params import PARAMETERS
-from rocas.ads.run import MODULE_ORDER, simulate_batch
+from rocas.stacks.ads.params import PARAMETERS
+from rocas.stacks.ads.run import MODULE_ORDER, simulate_batch
 from rocas.scenarios import load_example
 
 CASES = (

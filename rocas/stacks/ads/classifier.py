@@ -3,7 +3,7 @@
 The view is a strip of ``CAMERA_COLUMNS`` bearing columns over the camera's horizontal field of
 view; each column holds the apparent size of the nearest visible object and its colour (RGB),
 dimmed by fog and brightened by glare. A two-layer perceptron with fixed weights (shipped as
-``rocas/ads/brake_classifier.npz``, trained by ``scripts/train_brake_classifier.py``) maps
+``rocas/stacks/ads/brake_classifier.npz``, trained by ``scripts/train_brake_classifier.py``) maps
 the view to a brake probability. Its training labels carry the annotators' habit of marking red
 objects ahead as "braking", so its output rises for red objects: the flaw of the paper's A9.
 """
@@ -102,7 +102,7 @@ def mlp_forward(weights: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
 @functools.cache
 def load_weights() -> dict[str, np.ndarray]:
     """The shipped weights (read once)."""
-    data = (resources.files("rocas.ads") / WEIGHTS_RESOURCE).read_bytes()
+    data = (resources.files("rocas.stacks.ads") / WEIGHTS_RESOURCE).read_bytes()
     with np.load(BytesIO(data)) as npz:
         w = {k: np.asarray(npz[k]) for k in ("w1", "b1", "w2", "b2")}
     if w["w1"].shape[0] != FEATURES:

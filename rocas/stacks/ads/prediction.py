@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.ads.localization import LocalizationOutput
-from rocas.ads.perception import (
+from rocas.stacks.ads.localization import LocalizationOutput
+from rocas.stacks.ads.perception import (
     T_BICYCLE,
     T_PEDESTRIAN,
     T_UNKNOWN_UNMOVABLE,

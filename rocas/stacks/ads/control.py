@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.ads.localization import ChassisOutput, LocalizationOutput
-from rocas.ads.planning import PlanningOutput
+from rocas.stacks.ads.localization import ChassisOutput, LocalizationOutput
+from rocas.stacks.ads.planning import PlanningOutput
 from rocas.sim.geometry import _arange, clip, wrap_angle
 from rocas.sim.world import BatchWorld
 

@@ -5,7 +5,7 @@ Per simulation step: localization and chassis publish; every perception period, 
 runs every step on the latest plan; canbus turns the command into actuation.
 
 Module substitution: ``oracle_modules`` names, per variant, modules whose output is replaced by
-ground truth (:mod:`rocas.ads.oracle`); with none named the stack runs exactly as without it.
+ground truth (:mod:`rocas.stacks.ads.oracle`); with none named the stack runs exactly as without it.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rocas.ads.control import Control, ControlOutput
-from rocas.ads.localization import Canbus, ChassisOutput, Localization, LocalizationOutput
-from rocas.ads.oracle import SUBSTITUTABLE, PerfectPerception, PerfectPrediction
-from rocas.ads.perception import Perception, PerceptionOutput, ground_truth
-from rocas.ads.planning import Planning, PlanningOutput
-from rocas.ads.prediction import Prediction, PredictionOutput
+from rocas.stacks.ads.control import Control, ControlOutput
+from rocas.stacks.ads.localization import Canbus, ChassisOutput, Localization, LocalizationOutput
+from rocas.stacks.ads.oracle import SUBSTITUTABLE, PerfectPerception, PerfectPrediction
+from rocas.stacks.ads.perception import Perception, PerceptionOutput, ground_truth
+from rocas.stacks.ads.planning import Planning, PlanningOutput
+from rocas.stacks.ads.prediction import Prediction, PredictionOutput
 from rocas.errors import UsageError
 from rocas.sim.actors import ActorState
 from rocas.sim.dynamics import VehicleState

@@ -2,7 +2,7 @@ import pickle
 
 import pytest
 
-from rocas.ads.params import (
+from rocas.stacks.ads.params import (
     MODULES,
     PARAMETERS,
     ParamSet,
@@ -71,7 +71,7 @@ def test_every_parameter_is_read_by_some_module():
     from pathlib import Path
 
     import rocas
-    from rocas.ads.params import PARAMETERS
+    from rocas.stacks.ads.params import PARAMETERS
 
     root = Path(rocas.__file__).parent
     code = "\n".join(f.read_text() for f in root.rglob("*.py")

@@ -3,10 +3,10 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.ads import classifier
+from rocas.stacks.ads import classifier
 from rocas.scenarios.model import COLORS
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "train_brake_classifier.py"
+SCRIPT = Path(__file__).resolve().parents[3] / "scripts" / "train_brake_classifier.py"
 
 
 def _prob(color: str, dist: float, lateral: float = 0.0) -> float:

@@ -1,10 +1,10 @@
 """The built-in ADS in the simulator: its run behind :mod:`rocas.sim.protocol`, and the
 ``simulate``/``simulate_batch`` the pipeline, the CLI and the tests call.
 
-:class:`AdsRun` steps :class:`rocas.ads.stack.AdsStack` for the engine: it turns the modules'
+:class:`AdsRun` steps :class:`rocas.stacks.ads.stack.AdsStack` for the engine: it turns the modules'
 control command into an actuation, tells the oracles whether the held plan names a traffic
-reason to stand (:data:`rocas.ads.planning.STOP_JUSTIFIED`), publishes the channels
-(:class:`rocas.ads.recorder.AdsPublisher`) and fingerprints each module's output.
+reason to stand (:data:`rocas.stacks.ads.planning.STOP_JUSTIFIED`), publishes the channels
+(:class:`rocas.stacks.ads.recorder.AdsPublisher`) and fingerprints each module's output.
 :func:`simulate` and :func:`simulate_batch` resolve parameter overrides against the ADS's
 inventory and hand the engine (:mod:`rocas.sim.engine`) a factory of :class:`AdsRun`.
 """
@@ -16,11 +16,11 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from rocas.ads.params import ParamSet, stack_params
-from rocas.ads.planning import STOP_JUSTIFIED
-from rocas.ads.recorder import AdsPublisher
-from rocas.ads.stack import AdsStack, OracleModules, TickOutputs, output_digest
-from rocas.ads.topics import CHANNELS
+from rocas.stacks.ads.params import ParamSet, stack_params
+from rocas.stacks.ads.planning import STOP_JUSTIFIED
+from rocas.stacks.ads.recorder import AdsPublisher
+from rocas.stacks.ads.stack import AdsStack, OracleModules, TickOutputs, output_digest
+from rocas.stacks.ads.topics import CHANNELS
 from rocas.scenarios.model import Scenario
 from rocas.sim import engine
 from rocas.sim.engine import BatchResult, RunResult
@@ -38,9 +38,9 @@ class AdsRun:
     Args:
         world: the compiled batch.
         params: every parameter as an (N,) array, one value per variant
-            (:func:`rocas.ads.params.stack_params` of one full assignment per variant).
+            (:func:`rocas.stacks.ads.params.stack_params` of one full assignment per variant).
         oracle_modules: modules whose output is replaced by ground truth (module
-            substitution, :mod:`rocas.ads.oracle`): one set for every variant or one per
+            substitution, :mod:`rocas.stacks.ads.oracle`): one set for every variant or one per
             variant; empty runs the ADS as it is.
     """
 
@@ -109,7 +109,7 @@ def simulate_batch(
         track_outputs: also return per-module output fingerprints (``digests``, columns in
             :data:`MODULE_ORDER`).
         oracle_modules: modules whose output is replaced by ground truth (module
-            substitution, :mod:`rocas.ads.oracle`): one set of names for every variant, or N
+            substitution, :mod:`rocas.stacks.ads.oracle`): one set of names for every variant, or N
             sets; empty (the default) runs the ADS as it is.
 
         outputs: variant -> MCAP file: that variant is also recorded, the very file

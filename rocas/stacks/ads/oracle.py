@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rocas.ads import classifier
-from rocas.ads.localization import LocalizationOutput
-from rocas.ads.perception import (
+from rocas.stacks.ads import classifier
+from rocas.stacks.ads.localization import LocalizationOutput
+from rocas.stacks.ads.perception import (
     ST_BOX,
     ST_CAR,
     ST_CONE,
@@ -44,7 +44,7 @@ from rocas.ads.perception import (
     no_lights,
     sim_light_to_tl,
 )
-from rocas.ads.prediction import (
+from rocas.stacks.ads.prediction import (
     INTENT_STATIONARY,
     INTENT_UNKNOWN,
     MAX_POINTS,

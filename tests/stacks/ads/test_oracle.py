@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from rocas.ads import classifier
-from rocas.ads.oracle import SUBSTITUTABLE
-from rocas.ads.params import stack_params
-from rocas.ads.perception import sim_light_to_tl
-from rocas.ads.prediction import perceived_world_state
-from rocas.ads.run import AdsRun, resolve_params, simulate_batch
-from rocas.ads.stack import oracle_masks
+from rocas.stacks.ads import classifier
+from rocas.stacks.ads.oracle import SUBSTITUTABLE
+from rocas.stacks.ads.params import stack_params
+from rocas.stacks.ads.perception import sim_light_to_tl
+from rocas.stacks.ads.prediction import perceived_world_state
+from rocas.stacks.ads.run import AdsRun, resolve_params, simulate_batch
+from rocas.stacks.ads.stack import oracle_masks
 from rocas.errors import UsageError
 from rocas.scenarios.catalog import entry
 from rocas.sim.engine import rollout
@@ -130,7 +130,7 @@ def test_reactive_rollouts_are_reused_only_when_the_ego_cannot_matter(monkeypatc
     # state; reusing an earlier rollout must give the same bits as rolling at every step
     import dataclasses
 
-    from rocas.ads import oracle
+    from rocas.stacks.ads import oracle
 
     sc = dataclasses.replace(entry("A9").scenario, duration_s=6.0)
     step = oracle.step_actors

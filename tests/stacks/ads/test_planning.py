@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rocas.ads.planning import _row_gradient
+from rocas.stacks.ads.planning import _row_gradient
 
 
 def test_row_gradient_is_numpys_gradient_bit_for_bit():

@@ -1,7 +1,7 @@
 """The built-in ADS's messages: each module's output of one variant (variant 0 unless told) as
 its channel's protobuf.
 
-:class:`AdsPublisher` turns one step's :class:`rocas.ads.stack.TickOutputs` into messages
+:class:`AdsPublisher` turns one step's :class:`rocas.stacks.ads.stack.TickOutputs` into messages
 (headers with module name and per-topic sequence numbers) and hands them to a message sink: in
 recording mode the engine's :class:`rocas.sim.recorder.RunRecorder`, which writes the topology,
 the world attachment and the run's metadata around them.
@@ -13,9 +13,9 @@ import math
 
 import numpy as np
 
-from rocas.ads.planning import REASONS
-from rocas.ads.stack import TickOutputs
-from rocas.ads.topics import (
+from rocas.stacks.ads.planning import REASONS
+from rocas.stacks.ads.stack import TickOutputs
+from rocas.stacks.ads.topics import (
     CANBUS,
     CONTROL,
     LOCALIZATION,
