@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rocas.scenarios.model import COLORS
 from rocas.stacks.ads.classifier import (
     CAMERA_HFOV_RAD,
     FEATURES,
@@ -26,7 +27,6 @@ from rocas.stacks.ads.classifier import (
     camera_view,
     mlp_forward,
 )
-from rocas.scenarios.model import COLORS
 
 OUT = Path(__file__).resolve().parents[1] / "rocas" / "stacks" / "ads" / "brake_classifier.npz"
 HIDDEN = 64

@@ -38,7 +38,7 @@ def rocas():
 @pytest.fixture(scope="session")
 def red_truck_recording(tmp_path_factory):
     """A 9 s recording of the roundabout red-truck example (hard brake at ~6.8 s)."""
-    from rocas.stacks.ads.run import simulate
+    from rocas.rollout import simulate
     from rocas.scenarios import load_example
 
     path = tmp_path_factory.mktemp("red_truck") / "roundabout.mcap"
@@ -85,9 +85,9 @@ def small_campaign(tmp_path_factory):
     """A triaged campaign of two accidents (small budgets, in this process): the red-truck
     example as a scenario file, and a file that is not a scenario (listed as failed)."""
     from rocas.campaign import collect_inputs, triage
+    from rocas.catalog import scenario_toml
     from rocas.pipeline import AnalyzeConfig
     from rocas.scenarios import load_example
-    from rocas.scenarios.catalog import scenario_toml
     from rocas.search import SerialExecutor
 
     src = tmp_path_factory.mktemp("campaign_inputs")

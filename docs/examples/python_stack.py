@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 from google.protobuf import wrappers_pb2
 
+from rocas.rollout import rollout, rollout_batch, with_stack
 from rocas.scenarios import load_example
 from rocas.sim.world import project_on_reference, reference_at
 from rocas.stacks.base import Actuation, ChannelSpec, Observation, ParamSpec
 from rocas.stacks.registry import get_stack, register
-from rocas.stacks.rollout import rollout, rollout_batch, with_stack
 
 
 class FollowRun:
@@ -81,10 +81,10 @@ def main(out: Path) -> None:
     scenario = with_stack(load_example("roundabout_red_truck"), "follow")
     one = rollout(get_stack("follow"), scenario, {"control.gap_m": 10.0}, seed=0,
                   output=out / "follow.mcap")
-    print(f"{one.messages} messages, {one.outcomes[0].summary()}")
+    print(f"{one.messages} messages, {one.outcome.summary()}")
     sets = [{"control.gap_m": g} for g in (4.0, 10.0, 20.0)]
     batch = rollout_batch(get_stack("follow"), scenario, sets, seeds=[0, 0, 0])
-    assert np.array_equal(batch.ego[1], one.ego[0])  # variant i == its single run
+    assert np.array_equal(batch.ego[1], one.ego)  # variant i == its single run
     for p, o in zip(sets, batch.outcomes, strict=True):
         print(p, o.summary())
 

@@ -119,7 +119,7 @@ def documented_type(path: Path) -> tuple[str | None, str]:
     if truth is not None and isinstance(truth.get("id"), str):
         return truth["id"], str(truth.get("title", ""))
     if path.suffix in RECORDING_SUFFIXES:
-        from rocas.scenarios.catalog import entries
+        from rocas.catalog import entries
 
         for e in entries():
             if path.stem == e.key:

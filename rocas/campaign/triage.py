@@ -114,9 +114,9 @@ def _analyse_one(item: CampaignInput, out: Path, cfg: AnalyzeConfig, ex: Executo
     try:
         source: Any = item.path
         if item.kind == "scenario":
-            from rocas.scenarios import resolve_scenario
+            from rocas.rollout import load_scenario
 
-            source = resolve_scenario(str(item.path))
+            source = load_scenario(str(item.path))
         report = _finished_report(run_dir, source, cfg)
         if report is None:
             report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists(),
@@ -171,7 +171,7 @@ def _documented(item: CampaignInput, report: dict[str, Any]) -> list[str] | None
     module and fixes are the catalog entry's; a variant keeps its entry's)."""
     if item.truth_type is None:
         return None
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
 
     try:
         truth = entry(item.truth_type).truth

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -99,11 +100,11 @@ def run(args: argparse.Namespace, env: Env) -> int:
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
     if args.scenario:
-        from rocas.scenarios import resolve_scenario
+        from rocas.rollout import load_scenario
 
-        source: Any = resolve_scenario(args.source)
+        source: Any = load_scenario(args.source)
         if args.stack is not None:
-            from rocas.stacks.rollout import with_stack
+            from rocas.rollout import with_stack
 
             source = with_stack(source, args.stack)
         name = source.name
@@ -128,7 +129,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
         check_writable(args.rrd)  # before minutes of work, not after
     progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})
     executor = executor_from_arguments(args)
-    saved = _use_stack_file(args.stack_file, source, out) if args.stack_file else None
+    if args.stack_file:
+        cfg = dataclasses.replace(cfg, stack=_use_stack_file(args.stack_file, source, out))
     try:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress,
@@ -141,8 +143,6 @@ def run(args: argparse.Namespace, env: Env) -> int:
     finally:
         if executor is not None:
             executor.close()
-        if saved is not None:
-            _restore_env(saved)
     if args.json:
         env.stdout.write(json.dumps(report, indent=2) + "\n")
     else:
@@ -152,45 +152,32 @@ def run(args: argparse.Namespace, env: Env) -> int:
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
 
 
-def _use_stack_file(path: str, source: Any, out: Path) -> dict[str, str | None]:
-    """Route the analysis's simulations through the stack file's command (environment
-    variables, so spawned workers follow); returns the variables' previous values.
+def _use_stack_file(path: str, source: Any, out: Path) -> str:
+    """Register the stack file's external stack under its name (workers get it with their
+    tasks) and return the name, which drives the analysis's simulations.
 
     Raises:
         UsageError: the file is unreadable or its command simulates another stack.
     """
-    import os
-
     from rocas.errors import UsageError
-    from rocas.stacks.external import EXTERNAL_CACHE_ENV, EXTERNAL_ENV, ExternalStack
+    from rocas.scenarios.model import DEFAULT_STACK
+    from rocas.stacks.external import ExternalStack
+    from rocas.stacks.registry import register
 
-    stack_file = Path(path).resolve()
-    ext = ExternalStack.from_file(stack_file, out / "external")
+    ext = ExternalStack.from_file(Path(path).resolve(), (out / "external").resolve())
     if isinstance(source, Path):
         from rocas.recording.reader import open_recording
-        from rocas.stacks.base import STACK_METADATA
+        from rocas.recording.topology import STACK_METADATA
 
         meta = dict(open_recording(str(source)).scan().metadata)
-        wanted = meta.get(STACK_METADATA, {}).get("name", "ads")
+        wanted = meta.get(STACK_METADATA, {}).get("name", DEFAULT_STACK)
     else:
         wanted = source.ego.stack
     if ext.stack != wanted:
         raise UsageError(f"{path}: its command simulates stack {ext.stack!r}, the accident's "
                          f"is {wanted!r}", f'declare stack = "{wanted}" in the stack file')
-    saved = {k: os.environ.get(k) for k in (EXTERNAL_ENV, EXTERNAL_CACHE_ENV)}
-    os.environ[EXTERNAL_ENV] = str(stack_file)
-    os.environ[EXTERNAL_CACHE_ENV] = str((out / "external").resolve())
-    return saved
-
-
-def _restore_env(saved: dict[str, str | None]) -> None:
-    import os
-
-    for k, v in saved.items():
-        if v is None:
-            os.environ.pop(k, None)
-        else:
-            os.environ[k] = v
+    register(ext, replace=True)
+    return ext.name
 
 
 def kept_after_interrupt(out: Path, rrd: str | None) -> str:

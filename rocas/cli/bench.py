@@ -7,8 +7,10 @@ import json
 from pathlib import Path
 from typing import Any
 
+from rocas.catalog import shipped_recordings
 from rocas.cli.analyze import add_search_arguments
-from rocas.cli.console import Env
+from rocas.cli.console import Env, safe
+from rocas.scenarios.model import DEFAULT_STACK
 
 HELP = "run rocas analyze over the accident catalog and print Table 4 with hit/miss marks"
 
@@ -16,7 +18,7 @@ HELP = "run rocas analyze over the accident catalog and print Table 4 with hit/m
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("ids", nargs="*", metavar="ID", help="catalog entries (default: all), e.g. a09 a12")
     p.add_argument("--out", metavar="DIR", default="runs/bench", help="where run directories go")
-    p.add_argument("--stack", default="ads", metavar="NAME",
+    p.add_argument("--stack", default=DEFAULT_STACK, metavar="NAME",
                    help="score this stack's catalog (default ads, the built-in ADS; lav: the "
                         "LAV-like stack's, recordings in recordings/lav/)")
     p.add_argument("--recordings", metavar="DIR", default=None,
@@ -50,8 +52,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
-    recordings = Path(args.recordings) if args.recordings else (
-        Path("recordings") if args.stack == "ads" else Path("recordings") / args.stack)
+    recordings = Path(args.recordings) if args.recordings else shipped_recordings(args.stack)
     kwargs: dict[str, Any] = {"recordings": recordings, "compare_scope": args.compare_scope,
                               "stack": args.stack,
                               "instances": args.instances,
@@ -98,7 +99,7 @@ def render(res: dict, env: Env) -> None:
     from rocas.pipeline.report import change
 
     con = env.out()
-    who = "the built-in ADS" if res.get("stack", "ads") == "ads" else f"stack {res['stack']}"
+    who = f"stack {safe(res.get('stack', DEFAULT_STACK))}"
     t = Table(title=f"Table 4 for {who}: {res['hits']} of {res['total']} hit")
     for c in ("id", "trigger found", "module (expected)", "misconfiguration found (expected)",
               "verdict", "confidence", "s"):

@@ -8,7 +8,7 @@
   and are repaired, and writes the kept variants as scenario TOML.
 - ``generate --family F [--family G ...] --instances K [-o DIR] [--record]``: K variants per
   type and family (rotated, mirrored, other speeds, actors, starts, or all mixed; see
-  rocas.scenarios.variants), checked the same way, written as catalog-format files with their
+  rocas.catalog.variants), checked the same way, written as catalog-format files with their
   ground truth (and, with ``--record``, their accident recordings beside them).
 - ``generate --family F --family G ... --per-type --instances K [--max-tries N]``: K variants
   per type in all: the families are tried in the order given (at most N draws each), each
@@ -25,9 +25,10 @@ import json
 from pathlib import Path
 
 from rocas._fs import check_parent_exists
-from rocas.cli.console import Env
+from rocas.catalog.families import FAMILIES
+from rocas.cli.console import Env, safe
 from rocas.errors import UsageError
-from rocas.scenarios.families import FAMILIES
+from rocas.scenarios.model import DEFAULT_STACK
 
 HELP = "the accident catalog (A1-A12): list it, record its accidents, generate instances"
 
@@ -35,7 +36,7 @@ HELP = "the accident catalog (A1-A12): list it, record its accidents, generate i
 def add_arguments(p: argparse.ArgumentParser) -> None:
     sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
     stack = argparse.ArgumentParser(add_help=False)
-    stack.add_argument("--stack", default="ads", metavar="NAME",
+    stack.add_argument("--stack", default=DEFAULT_STACK, metavar="NAME",
                        help="the stack whose catalog to use (default ads, the built-in ADS; "
                             "lav: the LAV-like stack's)")
     ls = sub.add_parser("list", help="show the entries and their ground truth", parents=[stack])
@@ -72,8 +73,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     gen.add_argument("--json", action="store_true", help="print the counts as JSON")
 
 
-def _selected(only: list[str], stack: str = "ads"):  # noqa: ANN202
-    from rocas.scenarios.catalog import entries, entry
+def _selected(only: list[str], stack: str = DEFAULT_STACK):  # noqa: ANN202
+    from rocas.catalog import entries, entry
 
     return [entry(i, stack) for i in only] if only else list(entries(stack))
 
@@ -98,8 +99,7 @@ def _list(args: argparse.Namespace, env: Env) -> int:
     if args.json:
         print(json.dumps([_truth_json(e) for e in items], indent=2), file=env.stdout)
         return 0
-    table = Table(title="rocas accident catalog" + ("" if args.stack == "ads" else
-                                                     f" of stack {args.stack}"))
+    table = Table(title=f"rocas accident catalog of stack {safe(args.stack)}")
     for col in ("id", "title", "module", "parameter(s)", "fix", "consequence"):
         table.add_column(col)
     for e in items:
@@ -119,8 +119,8 @@ def _list(args: argparse.Namespace, env: Env) -> int:
 
 
 def _record(args: argparse.Namespace, env: Env) -> int:
-    from rocas.scenarios.catalog import accident_matches
-    from rocas.stacks.rollout import simulate
+    from rocas.catalog import accident_matches
+    from rocas.rollout import simulate
 
     out_dir = Path(args.directory)
     check_parent_exists(out_dir)
@@ -146,7 +146,7 @@ def _record(args: argparse.Namespace, env: Env) -> int:
 
 
 def _generate(args: argparse.Namespace, env: Env) -> int:
-    from rocas.scenarios.catalog import generate_instances, scenario_toml
+    from rocas.catalog import generate_instances, scenario_toml
 
     if args.instances < 1:
         raise UsageError("--instances must be >= 1")
@@ -157,9 +157,11 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
     if args.per_type and not args.family:
         raise UsageError("--per-type needs --family (the families that make up each type's K)")
     if args.family:
-        if args.stack != "ads":
-            raise UsageError("--family generates variants of the built-in catalog only",
-                             "leave out --stack, or use --instances alone")
+        from rocas.stacks.registry import get_stack
+
+        if not getattr(get_stack(args.stack), "variant_families", False):
+            raise UsageError(f"stack {args.stack!r} does not declare variant families",
+                             "use --instances alone, or a stack with variant_families")
         return _generate_variants(args, env)
     out_dir = Path(args.output) if args.output else None
     rows = []
@@ -191,7 +193,7 @@ def _generate(args: argparse.Namespace, env: Env) -> int:
 
 def _generate_variants(args: argparse.Namespace, env: Env) -> int:
     from rocas._fs import atomic_path
-    from rocas.scenarios.variants import generate_variants, variant_toml
+    from rocas.catalog.variants import generate_variants, variant_toml
 
     families = list(FAMILIES) if "all" in args.family else list(dict.fromkeys(args.family))
     out_dir = Path(args.output) if args.output else None
@@ -241,8 +243,8 @@ def _generate_variants(args: argparse.Namespace, env: Env) -> int:
 
 def _record_variant(v, out_dir: Path) -> None:  # noqa: ANN001
     """The variant's accident recording, as ``rocas catalog record`` writes an entry's."""
-    from rocas.stacks.ads.run import simulate
-    from rocas.scenarios.catalog import accident_matches
+    from rocas.catalog import accident_matches
+    from rocas.rollout import simulate
 
     res = simulate(v.scenario, output=out_dir / f"{v.name}.mcap")
     if not accident_matches(v.entry.truth, res.outcome):  # the check simulated the same run

@@ -9,7 +9,7 @@ import json
 
 from rocas._fs import check_writable
 from rocas.cli.console import Env, printable
-from rocas.errors import ScenarioError, UsageError
+from rocas.errors import UsageError
 
 HELP = "simulate a scenario with a stack (default: the built-in ADS), recording every channel to MCAP"
 
@@ -35,52 +35,31 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, env: Env) -> int:
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from rocas.stacks.ads.run import simulate
     from rocas.cli.params import parse_set_options
-    from rocas.scenarios import resolve_scenario
+    from rocas.rollout import load_scenario, simulate
 
     if not str(args.output).endswith(".mcap"):
         raise UsageError(f"output {args.output!r} should end in .mcap")
     if args.seed is not None and args.seed < 0:
         raise UsageError("--seed must be >= 0")
     check_writable(args.output)
-    scenario = resolve_scenario(args.scenario)
+    scenario = load_scenario(args.scenario)
     if args.duration is not None:
         if not 0 < args.duration <= 600:
             raise UsageError("--duration must be in (0, 600] seconds")
         scenario = dataclasses.replace(scenario, duration_s=args.duration)
     if args.stack is not None:
-        from rocas.stacks.rollout import with_stack
+        from rocas.rollout import with_stack
 
         scenario = with_stack(scenario, args.stack)
-    if scenario.ego.stack != "ads":  # another stack: rocas.stacks.rollout, its own inventory
-        from rocas.stacks.registry import get_stack
-        from rocas.stacks.rollout import resolve
-        from rocas.stacks.rollout import simulate as simulate_stack
-
-        overrides = {}
-        for a in args.assignments:
-            name, eq, value = a.partition("=")
-            if not eq:
-                raise UsageError(f"--set {a!r}: expected MODULE.PARAM=VALUE")
-            overrides[name.strip()] = value.strip()
-        try:
-            overrides = resolve(get_stack(scenario.ego.stack), overrides, "--set").overrides()
-        except ScenarioError as exc:
-            raise UsageError(exc.message, exc.hint) from None
-        result = simulate_stack(scenario, overrides, args.seed, output=args.output)
-    else:
-        overrides = parse_set_options(args.assignments, "simulate")
-    ticks = scenario.num_ticks
-    if scenario.ego.stack != "ads":
-        pass  # simulated above
-    elif args.no_progress:
+    overrides = parse_set_options(args.assignments, "simulate", scenario.ego.stack)
+    if args.no_progress:
         result = simulate(scenario, overrides, args.seed, output=args.output)
     else:
         with Progress(TextColumn("[bold]simulating[/] {task.description}"), BarColumn(),
                       TextColumn("{task.percentage:>3.0f}%"), TimeRemainingColumn(),
                       console=env.err(), transient=True) as progress:
-            task = progress.add_task(scenario.name, total=ticks)
+            task = progress.add_task(scenario.name, total=scenario.num_ticks)
             result = simulate(scenario, overrides, args.seed, output=args.output,
                               on_tick=lambda _t: progress.advance(task))
     out = result.outcome

@@ -18,6 +18,7 @@ from typing import Any
 from rocas.errors import UsageError
 from rocas.pipeline.analyze import analyze
 from rocas.pipeline.config import AnalyzeConfig
+from rocas.scenarios.model import DEFAULT_STACK
 
 
 def _expected(truth: Any, replayed: bool = True) -> dict[str, Any]:
@@ -130,11 +131,11 @@ def run_bench(
     compare_scope: int = 3,
     instances: int = 0,
     progress: Callable[[str], None] = lambda _: None,
-    stack: str = "ads",
+    stack: str = DEFAULT_STACK,
 ) -> dict[str, Any]:
     """Analyze catalog entries of ``stack``'s catalog and score them; returns the ``--json``
     object."""
-    from rocas.scenarios.catalog import entries, entry, generate_instances
+    from rocas.catalog import entries, entry, generate_instances
 
     chosen = [entry(i, stack) for i in ids] if ids else list(entries(stack))
     if not chosen:
@@ -243,7 +244,7 @@ def run_bench_seeds(
                                     "parameters": r["found"]["parameters"],
                                     "trigger": r["found"]["trigger_entity"]}
     seconds = sorted(r["seconds"] for res in runs for r in res["entries"])
-    return {"stack": kwargs.get("stack", "ads"), "seeds": list(seeds), "runs": runs,
+    return {"stack": kwargs.get("stack", DEFAULT_STACK), "seeds": list(seeds), "runs": runs,
             "hits_per_seed": {str(s): res["hits"] for s, res in zip(seeds, runs, strict=True)},
             "total": runs[0]["total"],
             "entries": list(per_entry.values()),

@@ -202,9 +202,13 @@ def adopted_answer(answers: list[dict[str, Any]], opinion: Any) -> int:
 
 
 def wants_second_opinion(run: Run) -> bool:
-    """Whether the confidence phase asks module substitution (the built-in ADS's oracles)."""
+    """Whether the confidence phase asks module substitution (when the stack declares modules
+    it can substitute)."""
+    from rocas.stacks.registry import get_stack
+
     assert run.scenario is not None
-    return run.cfg.second_opinion and run.scenario.ego.stack == "ads"
+    return run.cfg.second_opinion and bool(getattr(get_stack(run.scenario.ego.stack),
+                                                   "substitutable", ()))
 
 
 def start_second_opinion(run: Run) -> None:
@@ -320,7 +324,7 @@ def _past_cleared(answer: dict[str, Any], opinion: Any, result: Callable[[], Dif
 def record_reference(scenario: Scenario, reference: Path) -> None:
     """Simulate ``scenario`` into the recording ``reference`` (a picklable task: it may run in
     a worker)."""
-    from rocas.stacks.rollout import simulate
+    from rocas.rollout import simulate
 
     simulate(scenario, output=reference)
 

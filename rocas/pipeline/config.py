@@ -47,6 +47,9 @@ class AnalyzeConfig:
         alternate_references: how many other accident-free references (changing other
             properties than the chosen one) the accident is also diffed against, for the
             agreement of the deviating module (:mod:`rocas.pipeline.confidence`).
+        stack: the registered stack that drives the accident instead of the one its
+            scenario or recording names (``--stack-file``: an external command standing in for
+            the stack it simulates, with that stack's parameters); None: the named one.
         second_opinion: also ask module substitution (ground-truth perception, prediction)
             which module's output the accident needs.
     """
@@ -66,6 +69,7 @@ class AnalyzeConfig:
     screening: bool = True
     alternate_references: int = 2
     second_opinion: bool = True
+    stack: str | None = None
 
     def __post_init__(self) -> None:
         # every setting is checked here, before a run directory is made or a simulation runs

@@ -4,38 +4,31 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from rocas.stacks.ads.params import BRAKING_LIMITS, MODULES, PACE_LIMITS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
+from rocas.scenarios.model import DEFAULT_STACK
 from rocas.search.space import MutationSpace, Variable
+from rocas.stacks.registry import get_stack
 
 
-def cyber_space(module: str | None, current: Mapping[str, float], stack: str = "ads"
-                ) -> MutationSpace:
+def cyber_space(module: str | None, current: Mapping[str, float],
+                stack: str = DEFAULT_STACK) -> MutationSpace:
     """The parameters of ``module`` (all modules when None) as a mutation space, without the
-    :data:`~rocas.stacks.ads.params.BRAKING_LIMITS` (a "fix" that caps braking only hides the accident)
-    with the :data:`~rocas.stacks.ads.params.SENSING_LIMITS` free to grow only (from their current
-    value to their upper bound: a "fix" that senses less hides the accident too), and the
-    :data:`~rocas.stacks.ads.params.PACE_LIMITS` free to fall only (a "fix" that drives faster wins a
-    race instead of removing the cause).
+    stack's declared ``braking_limits`` (a "fix" that caps braking only hides the accident),
+    with its ``sensing_limits`` free to grow only (from their current value to their upper
+    bound: a "fix" that senses less hides the accident too), and its ``pace_limits`` free to
+    fall only (a "fix" that drives faster wins a race instead of removing the cause).
 
     Args:
         module: the initial deviating module, or None for ``--scope all``.
         current: the values in force in the accident run (defaults plus overrides).
-        stack: the registered stack whose parameters are searched (another stack names its
-            own braking, sensing and pace limits: ``braking_limits``, ``sensing_limits``,
-            ``pace_limits``).
+        stack: the registered stack whose parameters are searched.
     """
-    modules, specs = MODULES, parameters(module)
-    braking, sensing, pace = BRAKING_LIMITS, SENSING_LIMITS, PACE_LIMITS
-    if stack != "ads":
-        from rocas.stacks.registry import get_stack
-
-        st = get_stack(stack)
-        modules = st.modules
-        specs = tuple(p for p in st.parameters if module is None or p.module == module)
-        braking = frozenset(getattr(st, "braking_limits", ()))
-        sensing = frozenset(getattr(st, "sensing_limits", ()))
-        pace = frozenset(getattr(st, "pace_limits", ()))
+    st = get_stack(stack)
+    modules = st.modules
+    specs = tuple(p for p in st.parameters if module is None or p.module == module)
+    braking = frozenset(getattr(st, "braking_limits", ()))
+    sensing = frozenset(getattr(st, "sensing_limits", ()))
+    pace = frozenset(getattr(st, "pace_limits", ()))
     if module is not None and module not in modules:
         raise UsageError(f"no parameters for module {module!r}", f"modules: {', '.join(modules)}")
     out = []

@@ -56,8 +56,8 @@ def run_batch(tasks: Sequence[VariantTask],
     """Simulate tasks that share one scenario structure in one batch (picklable entry point),
     with the stack their scenario names; ``outputs`` (task index -> MCAP file) also records
     those tasks, each the very file its run alone records
-    (:func:`rocas.stacks.rollout.simulate_batch`)."""
-    from rocas.stacks.rollout import simulate_batch
+    (:func:`rocas.rollout.simulate_batch`)."""
+    from rocas.rollout import simulate_batch
 
     res = simulate_batch([t.scenario for t in tasks], params=[dict(t.params) for t in tasks],
                          seeds=[t.seed for t in tasks], outputs=outputs)
@@ -140,8 +140,8 @@ def batches_of(tasks: list[VariantTask], batch_size: int, workers: int) -> list[
 def prepare_worker() -> None:
     """What a worker imports before its first task (see ``warm_up`` of
     :class:`~rocas.search.executor.LocalExecutor`): the simulation with the built-in ADS."""
+    import rocas.rollout  # noqa: F401
     import rocas.stacks.ads.run  # noqa: F401
-    import rocas.stacks.rollout  # noqa: F401
 
 
 def params_tuple(overrides: Mapping[str, float]) -> tuple[tuple[str, float], ...]:

@@ -182,7 +182,7 @@ def reference_violation(r: VariantResult, needed_m: float, original: Outcome | N
 
 
 def phase_physical(run: Run) -> dict[str, Any]:
-    from rocas.stacks.rollout import simulate
+    from rocas.rollout import simulate
 
     if run.done("physical"):
         return run.state["done"]["physical"]
@@ -313,8 +313,8 @@ def _settle(run: Run, trail: list[Mutation]
     (None when the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.confidence import record_reference
+    from rocas.rollout import simulate
     from rocas.search.executor import done_future, submit
-    from rocas.stacks.rollout import simulate
 
     scn = run.scenario
     assert scn is not None

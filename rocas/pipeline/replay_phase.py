@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -18,8 +19,8 @@ from rocas.scenarios.model import Scenario
 
 
 def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) -> None:
+    from rocas.rollout import drive_with, simulate
     from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
-    from rocas.stacks.rollout import simulate
 
     ran: tuple[Any, np.ndarray, np.ndarray] | None = None  # (outcome, ego, actors) of the run
     if run.done("replay"):
@@ -39,6 +40,9 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
             import rocas.replay as replay_mod
 
             recon = replay_mod.reconstruct(recording)
+            if run.cfg.stack is not None:  # another registered stack drives the accident
+                recon = dataclasses.replace(recon, scenario=drive_with(recon.scenario,
+                                                                       run.cfg.stack))
             report = replay_mod.replay(recon, output=run.out / "accident.mcap")
             scenario = recon.scenario
             assert report.ego is not None and report.actors is not None
@@ -61,6 +65,8 @@ def phase_replay(run: Run, scenario: Scenario | None, recording: Path | None) ->
                     "emergency")
         else:
             assert scenario is not None
+            if run.cfg.stack is not None:
+                scenario = drive_with(scenario, run.cfg.stack)
             res = simulate(scenario, output=run.out / "accident.mcap")
             ran = (res.outcome, res.ego, res.actors)
             acc = Accident.of(res.outcome)

@@ -62,9 +62,10 @@ def build_report(state: dict[str, Any], accident: Any, verdict: str) -> dict[str
     mis = cyber.get("misconfiguration", [])
     from rocas.pipeline.config import REPORT_SETTINGS, AnalyzeConfig
     from rocas.pipeline.cyber import cyber_space
+    from rocas.scenarios.model import DEFAULT_STACK
 
     searched = cyber.get("parameters")
-    stack = done.get("replay", {}).get("stack", "ads")
+    stack = done.get("replay", {}).get("stack", DEFAULT_STACK)
     total = len(cyber_space(None, {}, stack).variables)  # what --scope all searches
     default = AnalyzeConfig()
     report = {

@@ -74,14 +74,9 @@ class Run:
         """The parameters the cyber phase searches (the module's, or all with --scope all) at
         the values in force in the accident run."""
         assert self.scenario is not None
-        ego = self.scenario.ego
-        if ego.stack == "ads":
-            from rocas.stacks.ads.params import ParamSet
-
-            current = dict(ParamSet(ego.overrides))
-        else:  # cyber_space takes the defaults of what is not overridden
-            current = ego.overrides
-        return cyber_space(module if self.cfg.scope == "module" else None, current, ego.stack)
+        ego = self.scenario.ego  # cyber_space takes the defaults of what is not overridden
+        return cyber_space(module if self.cfg.scope == "module" else None, ego.overrides,
+                           ego.stack)
 
     def save(self) -> None:
         write_text_atomic(self.out / "state.json", json.dumps(self.state, indent=2, default=jsonable))

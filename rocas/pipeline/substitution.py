@@ -20,10 +20,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from rocas.stacks.ads.oracle import SUBSTITUTABLE
-from rocas.stacks.ads.run import ParamsLike, simulate_batch
+from rocas.rollout import ParamsLike, simulate_batch
 from rocas.scenarios.model import Scenario
 from rocas.sim.oracles import Outcome
+from rocas.stacks.registry import get_stack
 
 Stance = Literal["agrees", "consistent", "disagrees", "undetermined"]
 
@@ -77,7 +77,7 @@ class SubstitutionOpinion:
     @property
     def jointly_avoided(self) -> bool:
         """Whether substituting every substitutable module together avoids the accident."""
-        return self.run(*SUBSTITUTABLE).avoided
+        return self.runs[-1].avoided  # the last run substitutes them all
 
     def stance(self, module: str | None) -> Stance:
         """How this opinion relates to ``module``, the deviating module another method named
@@ -95,7 +95,7 @@ class SubstitutionOpinion:
         if self.module is not None:
             return "agrees" if module == self.module else "disagrees"
         if self.jointly_avoided:
-            return "consistent" if module in SUBSTITUTABLE else "disagrees"
+            return "consistent" if module in self.runs[-1].modules else "disagrees"
         return "disagrees" if module in self.cleared else "consistent"
 
     def to_dict(self) -> dict[str, Any]:
@@ -115,15 +115,16 @@ def _clean(outcome: Outcome) -> bool:
 def second_opinion(scenario: Scenario, params: ParamsLike = None, *,
                    seed: int | None = None) -> SubstitutionOpinion:
     """Run the accident with each substitutable module replaced by ground truth (one batch of
-    ``len(SUBSTITUTABLE) + 2`` simulations) and name the module whose substitution avoids it.
+    the stack's substitutable modules + 2 simulations) and name the module whose substitution avoids it.
 
     Args:
         scenario: the accident scenario.
         params: the ADS parameter overrides the accident ran with.
         seed: the simulation seed (default: the scenario's).
     """
-    singles = [(m,) for m in SUBSTITUTABLE]
-    plans: list[tuple[str, ...]] = [(), *singles, tuple(SUBSTITUTABLE)]
+    substitutable = tuple(getattr(get_stack(scenario.ego.stack), "substitutable", ()))
+    singles = [(m,) for m in substitutable]
+    plans: list[tuple[str, ...]] = [(), *singles, substitutable]
     n = len(plans)
     res = simulate_batch([scenario] * n, params=[params] * n,
                          seeds=[scenario.seed if seed is None else seed] * n,
@@ -140,14 +141,14 @@ def second_opinion(scenario: Scenario, params: ParamsLike = None, *,
                                    cleared)
     named = next((r.modules[0] for r in single_runs if r.avoided), None)
     if named is not None:
-        upstream = SUBSTITUTABLE[:SUBSTITUTABLE.index(named)]
+        upstream = substitutable[:substitutable.index(named)]
         reason = f"ground-truth {named} avoids the accident" + (
             f" ({', '.join(upstream)} ground truth does not)" if upstream else "")
     elif runs[-1].avoided:
         reason = (f"no module's ground truth alone avoids the accident; "
-                  f"{' and '.join(SUBSTITUTABLE)} together do")
+                  f"{' and '.join(substitutable)} together do")
     else:
-        reason = (f"ground truth from {' and '.join(SUBSTITUTABLE)} leaves the accident: its "
+        reason = (f"ground truth from {' and '.join(substitutable)} leaves the accident: its "
                   f"cause is downstream (planning or control, which have no ground truth) or "
                   f"the ego could not avoid it")
     return SubstitutionOpinion(True, baseline, runs, named, reason, cleared)

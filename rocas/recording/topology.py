@@ -25,6 +25,8 @@ CONTROL_ROLE = "control"
 WORLD_ATTACHMENT = "rocas/world.json"
 EGO_METADATA = "rocas.ego"
 RUN_METADATA = "rocas.run"
+#: metadata record naming the registered stack that made a recording
+STACK_METADATA = "rocas.stack"
 
 
 def split_modules(value: str | None) -> tuple[str, ...]:

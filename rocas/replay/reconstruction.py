@@ -246,8 +246,7 @@ def reconstruct(path: str | os.PathLike[str]) -> Reconstruction:
         notes.append("no rocas.ego metadata: the ego's route and start come from "
                      "/localization/pose and its parameters are the defaults")
         ego = _ego_from_pose(rec, world)
-    if rec.stack != "ads":  # the stack that made the recording drives the replay
-        ego["stack"] = rec.stack
+    ego["stack"] = rec.stack  # the stack that made the recording drives the replay
     world["scenario"] = head
     try:
         base = scenario_from_dict({**world, "ego": ego}, source=f"{rec.path}:{'rocas/world.json'}")

@@ -159,7 +159,7 @@ def replay(source: Reconstruction | str | os.PathLike[str],
     Raises:
         UsageError: ``output`` is the recording being replayed.
     """
-    from rocas.stacks.rollout import simulate
+    from rocas.rollout import simulate
 
     if output is not None and not isinstance(source, Reconstruction):
         refuse_overwriting(source, output)

@@ -14,18 +14,23 @@ from typing import Any
 
 import numpy as np
 
-from rocas.stacks.ads.topics import (
-    EGO_METADATA,
-    RUN_METADATA,
-    TOPIC_OBSTACLES,
-    TOPIC_POSE,
-    WORLD_ATTACHMENT,
-)
-from rocas.errors import RecordingError
+from rocas.errors import RecordingError, UsageError
 from rocas.msgs import localization_pb2, perception_pb2
 from rocas.recording.reader import ChannelInfo, open_recording
+from rocas.recording.topology import (
+    EGO_METADATA,
+    RUN_METADATA,
+    STACK_METADATA,
+    WORLD_ATTACHMENT,
+)
 from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
-from rocas.stacks.base import STACK_METADATA
+from rocas.scenarios.model import DEFAULT_STACK
+from rocas.stacks.registry import get_stack
+
+#: rocas's standard channels, which replay reads without a stack's help: the ego's pose and
+#: the perceived obstacles in the ego's frame (rocas.msgs; the built-in ADS publishes them)
+TOPIC_POSE = "/localization/pose"
+TOPIC_OBSTACLES = "/perception/obstacles"
 
 _NS = 1e-9
 #: PerceptionObstacle.Type codes (perception.proto).
@@ -74,7 +79,8 @@ class RecordedRun:
         detections: the perception obstacles.
         perception_period_s: median time between perception frames [s].
         warnings: the reader's warnings (truncation, skipped damage, undecodable messages).
-        stack: the stack that made the recording (its ``rocas.stack`` record; "ads" without).
+        stack: the stack that made the recording (its ``rocas.stack`` record; the scenario
+            format's default stack without).
     """
 
     path: str
@@ -87,7 +93,7 @@ class RecordedRun:
     detections: Detections
     perception_period_s: float
     warnings: tuple[str, ...] = ()
-    stack: str = "ads"
+    stack: str = DEFAULT_STACK
 
 
 def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
@@ -121,10 +127,13 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
             if msg.HasField("ego_position"):
                 embedded = (msg.ego_position.x, msg.ego_position.y, msg.ego_heading)
             frames.append((t, list(msg.perception_obstacle), embedded))
-    stack = dict(rec.metadata).get(STACK_METADATA, {}).get("name", "ads")
-    foreign = stack != "ads" and not pose_rows  # another stack's own channels (rocas.stacks)
-    if foreign:
-        pose_rows, lanes, frames = _stack_motion(path, rec, stack)
+    stack = dict(rec.metadata).get(STACK_METADATA, {}).get("name", DEFAULT_STACK)
+    foreign = False  # read through the stack's own channels (its declared read_motion)
+    if not pose_rows:
+        reader = _motion_reader(path, stack)
+        if reader is not None:
+            pose_rows, lanes, frames = _stack_motion(path, rec, stack, reader)
+            foreign = True
     topics = rec.topics()
     damage = tuple(rec.report.warnings(path))
     missing = [t for t in (TOPIC_POSE, TOPIC_OBSTACLES) if t not in topics]
@@ -176,22 +185,21 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
 _KIND_TYPES = {"vehicle": TYPE_VEHICLE, "bicycle": TYPE_BICYCLE, "pedestrian": TYPE_PEDESTRIAN}
 
 
-def _stack_motion(path: str, rec: Any, name: str) -> tuple[list[tuple[float, ...]], list[str],
-                                                        list[Any]]:
-    """The ego's pose rows and the agents of a recording made by the registered stack
-    ``name``, read by the stack's own ``read_motion`` (:mod:`rocas.stacks.base`)."""
-    from rocas.errors import UsageError
-    from rocas.stacks.registry import get_stack
-
+def _motion_reader(path: str, name: str) -> Any:
+    """The ``read_motion`` the registered stack ``name`` declares (:mod:`rocas.stacks.base`),
+    or None when it declares none (its recordings carry the standard channels)."""
     try:
         stack = get_stack(name)
     except UsageError as exc:
         raise RecordingError(f"{path}: recorded by stack {name!r}, which is not registered here",
                              exc.hint) from None
-    reader = getattr(stack, "read_motion", None)
-    if reader is None:
-        raise RecordingError(f"{path}: stack {name!r} does not say how to replay its recordings",
-                             "give the stack a read_motion(recording) method (docs/own-stack.md)")
+    return getattr(stack, "read_motion", None)
+
+
+def _stack_motion(path: str, rec: Any, name: str, reader: Any
+                  ) -> tuple[list[tuple[float, ...]], list[str], list[Any]]:
+    """The ego's pose rows and the agents of a recording made by the stack ``name``, read by
+    its own ``reader``."""
     poses, agents = reader(rec)
     if not poses:
         raise RecordingError(f"{path}: no ego pose on stack {name!r}'s channels",

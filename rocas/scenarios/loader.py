@@ -17,10 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from rocas.errors import ScenarioError
+from rocas.geometry import point_at, polyline_length
 from rocas.scenarios.model import (
     ACTOR_KINDS,
     AREA_KINDS,
     COLORS,
+    DEFAULT_STACK,
     LIGHT_COLORS,
     LIGHT_MODES,
     OBJECT_KINDS,
@@ -136,26 +138,6 @@ def _arc(ctx: _Ctx, value: Any, key: str) -> tuple[tuple[float, float], ...]:
          round(cy + r * math.sin(a0 + (a1 - a0) * i / (n - 1)), 6))
         for i in range(n)
     )
-
-
-def polyline_length(points: tuple[tuple[float, float], ...]) -> float:
-    return sum(math.dist(points[i], points[i + 1]) for i in range(len(points) - 1))
-
-
-def point_at(points: tuple[tuple[float, float], ...], s: float) -> tuple[float, float, float]:
-    """(x, y, heading) at arc length ``s`` on a polyline (clamped to its ends)."""
-    acc = 0.0
-    for i in range(len(points) - 1):
-        (x0, y0), (x1, y1) = points[i], points[i + 1]
-        seg = math.hypot(x1 - x0, y1 - y0)
-        if seg <= 0:
-            continue
-        if acc + seg >= s or i == len(points) - 2:
-            u = min(max((s - acc) / seg, 0.0), 1.0)
-            return x0 + u * (x1 - x0), y0 + u * (y1 - y0), math.atan2(y1 - y0, x1 - x0)
-        acc += seg
-    (x0, y0), (x1, y1) = points[0], points[-1]
-    return x0, y0, math.atan2(y1 - y0, x1 - x0)
 
 
 _LANE_KEYS = {"id", "points", "arc", "width_m", "speed_limit_mps", "successors", "junction"}
@@ -314,17 +296,10 @@ def _actor(ctx: _Ctx, d: Any, key: str, lanes: Mapping[str, Lane]) -> Actor:
     )
 
 
-def _params(ctx: _Ctx, d: Any, key: str, stack: str = "ads") -> tuple[tuple[str, float], ...]:
-    if stack == "ads":
-        from rocas.stacks.ads.params import PARAMETERS
-    else:  # another registered stack's inventory (resolved lazily, like the ADS's)
-        from rocas.errors import UsageError
-        from rocas.stacks.registry import get_stack
-
-        try:
-            PARAMETERS = {p.full_name: p for p in get_stack(stack).parameters}  # noqa: N806
-        except UsageError as exc:
-            raise ctx.fail("ego.stack", f"{exc.message} ({exc.hint})") from None
+def _params(ctx: _Ctx, d: Any, key: str) -> tuple[tuple[str, float], ...]:
+    """``[ego.params.MODULE]`` tables -> sorted ``(("module.name", value), ...)``: numbers only;
+    whether they are the stack's parameters, in range, is the rollout's to check
+    (:func:`rocas.rollout.check_params`), which knows the stacks."""
     if not isinstance(d, Mapping):
         raise ctx.fail(key, "expected a table of module tables")
     flat: dict[str, float] = {}
@@ -332,12 +307,7 @@ def _params(ctx: _Ctx, d: Any, key: str, stack: str = "ads") -> tuple[tuple[str,
         if not isinstance(table, Mapping):
             raise ctx.fail(f"{key}.{module}", "expected a table like [ego.params.planning]")
         for name, value in table.items():
-            full = f"{module}.{name}"
-            if full not in PARAMETERS:
-                what = "ADS parameter" if stack == "ads" else f"parameter of stack {stack!r}"
-                raise ctx.fail(f"{key}.{full}", f"unknown {what} (see 'rocas params')")
-            p = PARAMETERS[full]
-            flat[full] = _num(ctx, value, f"{key}.{full}", p.low, p.high)
+            flat[f"{module}.{name}"] = _num(ctx, value, f"{key}.{module}.{name}")
     return tuple(sorted(flat.items()))
 
 
@@ -349,9 +319,9 @@ def _ego(ctx: _Ctx, d: Any, lanes: Mapping[str, Lane]) -> Ego:
         raise ctx.fail("ego.route", "route is empty")
     length = route_length(route, lanes)
     dest = t.get("destination_s_m")
-    stack = t.get("stack", "ads")
+    stack = t.get("stack", DEFAULT_STACK)
     if not isinstance(stack, str) or not stack:
-        raise ctx.fail("ego.stack", "expected a stack name such as \"ads\" or \"lav\"")
+        raise ctx.fail("ego.stack", "expected the name of a registered stack")
     return Ego(
         route=route,
         start_s_m=_num(ctx, t.get("start_s_m", 0.0), "ego.start_s_m", 0.0, length),
@@ -359,7 +329,7 @@ def _ego(ctx: _Ctx, d: Any, lanes: Mapping[str, Lane]) -> Ego:
         start_speed_mps=_num(ctx, t.get("start_speed_mps", 0.0), "ego.start_speed_mps", 0, 40),
         destination_s_m=None if dest is None else _num(ctx, dest, "ego.destination_s_m", 0,
                                                        length),
-        params=_params(ctx, t.get("params", {}), "ego.params", stack),
+        params=_params(ctx, t.get("params", {}), "ego.params"),
         stack=stack,
     )
 
@@ -444,7 +414,7 @@ def load_scenario(path: str | Path) -> Scenario:
     except InputError as exc:
         raise ScenarioError(exc.message, exc.hint) from None
     # a catalog entry is a scenario file plus the known answer, which is no part of the
-    # scenario (rocas.scenarios.catalog reads and checks it)
+    # scenario (rocas.catalog reads and checks it)
     if isinstance(data.get("ground_truth"), dict):
         del data["ground_truth"]
     return scenario_from_dict(data, source=str(p))
@@ -505,7 +475,7 @@ def scenario_to_dict(s: Scenario) -> dict[str, Any]:
                            "start_speed_mps": s.ego.start_speed_mps, "params": params}
     if s.ego.destination_s_m is not None:
         ego["destination_s_m"] = s.ego.destination_s_m
-    if s.ego.stack != "ads":  # the built-in ADS's scenarios read (and hash) as before
+    if s.ego.stack != DEFAULT_STACK:  # the format's default is left out (files hash as before)
         ego["stack"] = s.ego.stack
     w = s.weather
     return {

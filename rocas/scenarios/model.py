@@ -187,6 +187,10 @@ class Actor:
         return PEDESTRIAN_DIMENSIONS
 
 
+#: the stack a scenario file that names none is driven by (the built-in ADS)
+DEFAULT_STACK = "ads"
+
+
 @dataclass(frozen=True)
 class Ego:
     """The vehicle under test and its mission.
@@ -199,8 +203,8 @@ class Ego:
         destination_s_m: mission end along the route [m]; None means the route's end.
         params: parameter overrides of the stack ``(("module.name", value), ...)`` sorted by
             name.
-        stack: the registered stack that drives the ego (:mod:`rocas.stacks.registry`):
-            "ads" is the built-in ADS.
+        stack: the registered stack that drives the ego (:mod:`rocas.stacks.registry`);
+            :data:`DEFAULT_STACK` when a scenario file names none.
     """
 
     route: tuple[str, ...]
@@ -209,7 +213,7 @@ class Ego:
     start_speed_mps: float = 0.0
     destination_s_m: float | None = None
     params: tuple[tuple[str, float], ...] = ()
-    stack: str = "ads"
+    stack: str = DEFAULT_STACK
 
     @property
     def overrides(self) -> dict[str, float]:

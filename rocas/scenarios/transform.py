@@ -18,7 +18,7 @@ What stays *not* invariant is the ADS's business, not the scenario's: localizati
 drawn in world x/y (so a rotated run sees the same noise values along other road directions),
 and the brake classifier's apparent-width feature reads a world yaw against an ego-frame bearing
 (docs/ads.md, "Known bug"), so a rotated world can change what the camera classifier scores.
-The variant generator (:mod:`rocas.scenarios.variants`) keeps only variants that still crash as
+The variant generator (:mod:`rocas.catalog.variants`) keeps only variants that still crash as
 documented, so these effects decide which rotations are kept, never what a kept one means.
 """
 
@@ -148,7 +148,7 @@ def transform_scenario(s: Scenario, t: PlaneTransform) -> Scenario:
 
 def transform_change(change: Mapping[str, Any], t: PlaneTransform) -> dict[str, Any]:
     """A catalog mutation (``{"actor": id, field: value, ...}`` in the file format, see
-    :func:`rocas.scenarios.catalog.mutate`) mapped by ``t``: positions, waypoints, polygons,
+    :func:`rocas.catalog.mutate`) mapped by ``t``: positions, waypoints, polygons,
     facings, yaws and lateral offsets move with the world; anything else is kept."""
     out: dict[str, Any] = {}
     for key, value in change.items():

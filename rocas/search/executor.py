@@ -20,6 +20,7 @@ from typing import Any, Protocol, TypeVar
 
 from rocas._worker import STOP_SIGNALS, start_worker
 from rocas.errors import UsageError
+from rocas.stacks.registry import carrying
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -95,6 +96,7 @@ class LocalExecutor:
         if self.workers == 1 or len(tasks) <= 1:
             return [fn(t) for t in tasks]
         pool = self._get_pool()
+        fn = carrying(fn)  # type: ignore[assignment]  # the parent's run-time stacks come along
         out: list[Any] = [None] * len(tasks)
         under_way: dict[Future[R], int] = {}
         following = iter(range(len(tasks)))
@@ -126,7 +128,7 @@ class LocalExecutor:
             return done_future(fn, *args)
         pool = self._get_pool()
         with _stop_signals_held():  # a submission may start a worker
-            return pool.submit(fn, *args)
+            return pool.submit(carrying(fn), *args)
 
     def warm_up(self, fn: Callable[[], Any]) -> None:
         """Start the workers now and have each run ``fn`` (its imports, say) without waiting

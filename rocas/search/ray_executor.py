@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
 from rocas.errors import RocasError, UsageError
+from rocas.stacks.registry import carrying
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -105,10 +106,12 @@ class RayExecutor:
         tasks = list(tasks)
         if not tasks:
             return []
-        remote = self._remote.get(fn)
+        carried = carrying(fn)  # the stacks registered here at run time come along
+        target = fn if carried is fn else _call
+        remote = self._remote.get(target)
         if remote is None:
-            remote = self._remote[fn] = self._ray.remote(num_cpus=1, max_retries=0)(fn)
-        refs = [remote.remote(t) for t in tasks]
+            remote = self._remote[target] = self._ray.remote(num_cpus=1, max_retries=0)(target)
+        refs = [remote.remote(t) if carried is fn else remote.remote(carried, t) for t in tasks]
         try:
             return list(self._ray.get(refs))
         except BaseException:
@@ -134,6 +137,11 @@ class RayExecutor:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _call(fn: Callable[[T], R], task: T) -> R:
+    """``fn(task)`` as a Ray task (a :class:`rocas.stacks.registry.Carrying` is no function)."""
+    return fn(task)
 
 
 def ray_version(ray: Any) -> tuple[int, ...]:

@@ -8,8 +8,8 @@
 The stack is the caller's: a :data:`rocas.sim.protocol.StackFactory` that builds a
 :class:`rocas.sim.protocol.StackRun` for the compiled world. Per step the stack observes and
 decides, the ego integrates its actuation, the actors move, the oracles judge. Both functions
-are pure functions of their inputs: (scenario, stack, seed) -> result. The built-in ADS is wired
-in by :mod:`rocas.stacks.ads.run`, whose ``simulate``/``simulate_batch`` take parameter overrides.
+are pure functions of their inputs: (scenario, stack, seed) -> result. A registered stack is
+wired in by :mod:`rocas.rollout`, whose ``simulate``/``simulate_batch`` take parameter overrides.
 """
 
 from __future__ import annotations
@@ -158,7 +158,8 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
                    digest_modules: Sequence[str] | None = None,
                    outputs: Mapping[int, str | os.PathLike[str]] | None = None,
                    channels: Sequence[Channel] = (),
-                   param_overrides: Sequence[Mapping[str, float]] | None = None) -> BatchResult:
+                   param_overrides: Sequence[Mapping[str, float]] | None = None,
+                   stack_name: str | None = None) -> BatchResult:
     """Simulate N variants of one structure together (batch mode), recording the rows named in
     ``outputs``.
 
@@ -174,6 +175,7 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
             ``param_overrides``; the stack must publish rows other than 0
             (:func:`rollout`'s ``sinks``).
         channels, param_overrides: what the recordings carry (one overrides mapping per row).
+        stack_name: the stack's registered name, which the recordings carry.
 
     Returns:
         :class:`BatchResult`; variant i is identical to a run of ``scenarios[i]`` alone
@@ -191,7 +193,7 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
     with contextlib.ExitStack() as opened:
         recorders = {i: opened.enter_context(RunRecorder(
             path, scenarios[i], channels,
-            param_overrides[i] if param_overrides is not None else {}, seeds[i]))
+            param_overrides[i] if param_overrides is not None else {}, seeds[i], stack_name))
             for i, path in sorted(outputs.items())}
         res = rollout(world, scenarios, stack(world), digest_modules=digest_modules,
                       sinks={i: rec.write for i, rec in recorders.items()})
@@ -203,13 +205,14 @@ def simulate_batch(scenarios: Sequence[Scenario], stack: StackFactory,
 def simulate(scenario: Scenario, stack: StackFactory, seed: int | None = None, *,
              output: str | os.PathLike[str] | None = None, channels: Sequence[Channel] = (),
              param_overrides: Mapping[str, float] | None = None,
-             on_tick: Callable[[int], None] | None = None) -> RunResult:
+             on_tick: Callable[[int], None] | None = None,
+             stack_name: str | None = None) -> RunResult:
     """Simulate one run (recording mode).
 
     With ``output``, write an MCAP recording: the stack's ``channels`` with their topology,
     every message the stack publishes, the static world attachment, the mission with
     ``param_overrides`` (the stack's parameters that differ from its defaults) and the
-    outcome (:class:`rocas.sim.recorder.RunRecorder`).
+    outcome (:class:`rocas.sim.recorder.RunRecorder`), and the stack's name (``stack_name``).
     """
     seed = scenario.seed if seed is None else seed
     world = compile_batch([scenario], [seed])
@@ -219,7 +222,8 @@ def simulate(scenario: Scenario, stack: StackFactory, seed: int | None = None, *
     else:
         from rocas.sim.recorder import RunRecorder
 
-        with RunRecorder(output, scenario, channels, param_overrides or {}, seed) as rec:
+        with RunRecorder(output, scenario, channels, param_overrides or {}, seed,
+                         stack_name) as rec:
             res = rollout(world, [scenario], stack(world), sink=rec.write, on_tick=on_tick)
             rec.finish(res.outcomes[0])
         path, count = str(output), rec.count

@@ -14,7 +14,12 @@ import os
 from collections.abc import Mapping, Sequence
 from types import TracebackType
 
-from rocas.recording.topology import EGO_METADATA, RUN_METADATA, WORLD_ATTACHMENT
+from rocas.recording.topology import (
+    EGO_METADATA,
+    RUN_METADATA,
+    STACK_METADATA,
+    WORLD_ATTACHMENT,
+)
 from rocas.recording.writer import RecordingWriter
 from rocas.scenarios.loader import scenario_to_dict, world_to_dict
 from rocas.scenarios.model import Scenario
@@ -32,11 +37,12 @@ class RunRecorder:
         channels: the stack's channels, registered in this order.
         param_overrides: the stack's parameters that differ from its defaults.
         seed: the run's seed.
+        stack_name: the registered stack that made the run (the ``rocas.stack`` record).
     """
 
     def __init__(self, path: str | os.PathLike[str], scenario: Scenario,
                  channels: Sequence[Channel], param_overrides: Mapping[str, float],
-                 seed: int) -> None:
+                 seed: int, stack_name: str | None = None) -> None:
         self.writer = RecordingWriter(path)
         self.count = 0
         for ch in channels:
@@ -62,6 +68,8 @@ class RunRecorder:
             "ego": json.dumps(ego, sort_keys=True),
             "actors": json.dumps(scenario_to_dict(scenario)["actors"]),
         })
+        if stack_name is not None:
+            self.writer.add_metadata(STACK_METADATA, {"name": stack_name})
 
     # -- context manager ------------------------------------------------------------------
     def __enter__(self) -> RunRecorder:

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas.errors import ScenarioError
+from rocas.geometry import point_at
 from rocas.scenarios.model import (
     COLORS,
     EGO_LENGTH_M,
@@ -374,7 +375,6 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
     lanes_by_id = {ln.id: ln for ln in first.lanes}
     stop_xy = []
     for tl in first.traffic_lights:
-        from rocas.scenarios.loader import point_at
         x, y, _ = point_at(lanes_by_id[tl.stop_lane].centerline, tl.stop_s_m)
         stop_xy.append([x, y])
 

@@ -13,6 +13,7 @@ depends on another variant.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -21,15 +22,16 @@ import numpy as np
 
 from rocas.errors import ScenarioError
 
+# what a recording carries besides the channels: one definition, the recording layer's
+from rocas.recording.topology import (  # noqa: F401
+    EGO_METADATA,
+    RUN_METADATA,
+    STACK_METADATA,
+    WORLD_ATTACHMENT,
+)
+
 # what a stack receives and returns each step is the simulator's contract, one definition
 from rocas.sim.protocol import Actuation, MessageSink, Observation, StackRun  # noqa: F401
-
-#: recording attachment holding the static world (the scenario format without actors)
-WORLD_ATTACHMENT = "rocas/world.json"
-#: recording metadata record naming the stack that made the recording
-STACK_METADATA = "rocas.stack"
-EGO_METADATA = "rocas.ego"
-RUN_METADATA = "rocas.run"
 
 
 @dataclass(frozen=True)
@@ -127,35 +129,68 @@ class AlphaBetaTracker:
     hidden_frames: int = 1
 
 
-#: Optional, for ``rocas analyze`` on a stack's recordings: a stack may define
-#: ``read_motion(recording) -> (list[PoseRow], list[AgentRow])`` reading its own ego and
-#: perception channels from an open :class:`rocas.recording.reader.Recording` (one pass);
-#: ``tracker(params) -> AlphaBetaTracker | None``, its obstacle tracker with the parameters
-#: in force (a mapping of full names to values), which replay undoes;
-#: ``braking_limits`` / ``sensing_limits`` (parameter names) that the cyber search must not
-#: lower (a "fix" that brakes or senses less only hides the accident); and ``pace_limits`` that
-#: it must not raise (a "fix" that drives faster wins a race).
+#: What a stack may declare besides the protocol (read with ``getattr``; never its name):
+#:
+#: - ``read_motion(recording) -> (list[PoseRow], list[AgentRow])``: its own ego and perception
+#:   channels read from an open :class:`rocas.recording.reader.Recording` (one pass), for
+#:   replaying a recording that lacks rocas's standard pose and obstacle channels;
+#: - ``tracker(params) -> AlphaBetaTracker | None``: its obstacle tracker with the parameters in
+#:   force (a mapping of full names to values), which replay undoes;
+#: - ``braking_limits`` / ``sensing_limits``: parameter names the cyber search must not lower
+#:   (a "fix" that brakes or senses less only hides the accident), ``pace_limits``: names it
+#:   must not raise (a "fix" that drives faster wins a race);
+#: - ``substitutable``: modules whose output it can replace by ground truth (module
+#:   substitution; ``build`` then takes ``oracle_modules``), which the confidence phase's
+#:   second opinion uses;
+#: - ``records_rows``: its runs publish any row of a batch (``publish(..., variant=i)``), so a
+#:   batch records several rows in one pass;
+#: - ``catalog``: the folder of :mod:`rocas.catalog` holding its accident catalog;
+#:   ``recordings``: the subfolder of the repository's ``recordings/`` with its catalog's
+#:   recordings (default: its name); ``variant_families``: its catalog takes
+#:   :mod:`rocas.catalog.variants`' families (``rocas catalog generate --family``).
+CAPABILITIES = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace_limits",
+                "substitutable", "records_rows", "catalog", "recordings", "variant_families")
+
+
+@runtime_checkable
+class SelfSimulating(Protocol):
+    """A stack that runs its own simulator (an external command) instead of being built into
+    rocas's world: the rollout hands it whole scenarios."""
+
+    name: str
+    parameters: tuple[ParamSpec, ...]
+
+    def simulate_one(self, scenario: Any, params: StackParams, seed: int | None, *,
+                     output: Any = None) -> Any:
+        """One run (a :class:`rocas.sim.engine.RunResult`), recorded to ``output`` if given."""
+        ...
+
+    def simulate_batch(self, scenarios: Sequence[Any], params: Sequence[StackParams],
+                       seeds: Sequence[int]) -> Any:
+        """N runs (a :class:`rocas.sim.engine.BatchResult`)."""
+        ...
 
 
 class StackParams(Mapping[str, float]):
-    """A full, validated, hashable, picklable assignment of one stack's parameters."""
+    """A full, validated, hashable, picklable assignment of one stack's parameters: the
+    stack's defaults with overrides on top (the one parameter API of every stack)."""
 
-    __slots__ = ("_specs", "_values")
+    __slots__ = ("_index", "_specs", "_values")
 
     def __init__(self, specs: Sequence[ParamSpec], overrides: Mapping[str, float] | None = None,
                  *, source: str = "overrides") -> None:
         self._specs = tuple(specs)
-        index = {p.full_name: p for p in self._specs}
+        self._index = _index_of(self._specs)
         values = {p.full_name: float(p.default) for p in self._specs}
         for name, value in (overrides or {}).items():
-            values[name] = validate_value(index, name, value, source=source)
+            values[name] = validate_value(self._index, name, value, source=source)
         self._values = tuple(values[p.full_name] for p in self._specs)
 
     def __getitem__(self, name: str) -> float:
-        for p, v in zip(self._specs, self._values, strict=True):
-            if p.full_name == name:
-                return v
-        raise KeyError(name)
+        try:
+            return self._values[_positions(self._specs)[name]]
+        except KeyError:
+            raise KeyError(name) from None
 
     def __iter__(self) -> Iterator[str]:
         return (p.full_name for p in self._specs)
@@ -170,10 +205,35 @@ class StackParams(Mapping[str, float]):
         return isinstance(other, StackParams) and other._values == self._values \
             and other._specs == self._specs
 
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
+        return (StackParams, (self._specs, self.overrides()))
+
+    @property
+    def specs(self) -> tuple[ParamSpec, ...]:
+        return self._specs
+
     def overrides(self) -> dict[str, float]:
         """Only the values that differ from the defaults."""
         return {p.full_name: v for p, v in zip(self._specs, self._values, strict=True)
                 if v != p.default}
+
+    def with_values(self, changes: Mapping[str, float]) -> StackParams:
+        """A copy with ``changes`` (full names) on top."""
+        return StackParams(self._specs, {**self.overrides(), **changes})
+
+    def as_array(self) -> np.ndarray:
+        """Values in inventory order, shape (P,)."""
+        return np.asarray(self._values, dtype=np.float64)
+
+
+@functools.cache
+def _index_of(specs: tuple[ParamSpec, ...]) -> dict[str, ParamSpec]:
+    return {p.full_name: p for p in specs}
+
+
+@functools.cache
+def _positions(specs: tuple[ParamSpec, ...]) -> dict[str, int]:
+    return {p.full_name: i for i, p in enumerate(specs)}
 
 
 def validate_value(index: Mapping[str, ParamSpec], name: str, value: object, *,
@@ -199,8 +259,24 @@ def validate_value(index: Mapping[str, ParamSpec], name: str, value: object, *,
 
 
 def batch_params(sets: Sequence[StackParams]) -> dict[str, np.ndarray]:
-    """N assignments -> ``{name: (N,) float64}``, what a stack's modules read."""
+    """N assignments of one stack -> ``{name: (N,) float64}``, what a stack's modules read."""
     if not sets:
         return {}
-    names = list(sets[0])
-    return {n: np.array([s[n] for s in sets], dtype=np.float64) for n in names}
+    table = np.stack([s.as_array() for s in sets])
+    return {name: np.ascontiguousarray(table[:, i]) for i, name in enumerate(sets[0])}
+
+
+def parse_assignment(text: str, specs: Sequence[ParamSpec]) -> tuple[str, float]:
+    """``module.param=value`` (as given to ``--set``), checked against a stack's inventory."""
+    name, sep, raw = text.partition("=")
+    name, raw = name.strip(), raw.strip().lower()
+    if not sep or not name or not raw:
+        raise ScenarioError(f"--set {text}: expected module.param=value")
+    if raw in ("true", "false"):
+        value = float(raw == "true")
+    else:
+        try:
+            value = float(raw)
+        except ValueError:
+            raise ScenarioError(f"--set {text}: {raw!r} is not a number") from None
+    return name, validate_value(_index_of(tuple(specs)), name, value, source="--set")

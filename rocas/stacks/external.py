@@ -10,7 +10,7 @@ A stack file (TOML) declares the command and the parameter space::
 
 rocas runs ``COMMAND --scenario S.json --config C.json --out run.mcap`` once per simulation;
 ``C.json`` is ``{"params": {...overrides...}, "seed": N}``. The command writes an MCAP
-recording carrying the ``rocas.run`` outcome record (as :func:`rocas.stacks.rollout.rollout`
+recording carrying the ``rocas.run`` outcome record (as :func:`rocas.rollout.rollout`
 does). Batches run as several processes at once; every result is cached under the input's
 hash (command, scenario, overrides, seed), so a repeated simulation is not run again.
 
@@ -18,17 +18,19 @@ For an analysis the command also has a batch mode, ``COMMAND --batch B.json --ou
 ``B.json`` is ``{"runs": [{"scenario": ..., "params": {...}, "seed": N}, ...]}`` (variants of
 one scenario structure), ``R.npz`` holds what the searches read (``times`` (T + 1,), ``ego``
 (N, T + 1, 5), ``actors`` (N, T + 1, A, 4), ``min_gap`` (N, T + 1), ``actor_ids`` (A,) and
-``outcomes``, one ``rocas.run`` record per variant as JSON). A stack file that names the
-registered stack its command simulates (``stack = "lav"``) can stand in for it:
-:func:`external_for` reads ``ROCAS_EXTERNAL_STACK`` (the stack file; ``rocas analyze
---stack-file`` sets it, spawned workers inherit it) and :mod:`rocas.stacks.rollout` then sends
-that stack's simulations through the command, batches split over ``processes`` processes.
+``outcomes``, one ``rocas.run`` record per variant as JSON). ``rocas analyze --stack-file``
+registers the stack under its name (:func:`rocas.stacks.registry.register`; workers get it with
+their tasks) and analyses with it: a self-simulating stack
+(:class:`rocas.stacks.base.SelfSimulating`) that the rollout hands whole scenarios, batches
+split over ``processes`` processes. A stack file that names the registered stack its command
+simulates (``stack = "lav"``) takes that stack's declarations (modules, channels, tracker,
+limits, how replay reads its recordings): the analysis of a ``lav`` recording can then run
+through the command.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
-import functools
 import hashlib
 import json
 import os
@@ -45,6 +47,7 @@ import numpy as np
 from rocas.errors import RecordingError, ScenarioError, UsageError
 from rocas.scenarios.loader import scenario_to_dict
 from rocas.scenarios.model import Scenario
+from rocas.sim.engine import BatchResult, RunResult
 from rocas.sim.oracles import Outcome
 from rocas.stacks.base import RUN_METADATA, ParamSpec, StackParams
 
@@ -187,13 +190,10 @@ class ExternalStack:
 
     def simulate_batch(self, scenarios: Sequence[Scenario],
                        params: Sequence[Mapping[str, float] | None],
-                       seeds: Sequence[int]) -> Any:
-        """N variants of one scenario structure through the command's batch mode, as a
-        :class:`rocas.stacks.rollout.Rollout` (no digests). Cached variants are read back;
-        the others are split over up to ``processes`` processes of at least
-        ``min_per_process`` variants, one batch each."""
-        from rocas.stacks.rollout import Rollout
-
+                       seeds: Sequence[int]) -> BatchResult:
+        """N variants of one scenario structure through the command's batch mode (no
+        digests). Cached variants are read back; the others are split over up to
+        ``processes`` processes of at least ``min_per_process`` variants, one batch each."""
         keys = [self.key(s, self._overrides(p), seed)
                 for s, p, seed in zip(scenarios, params, seeds, strict=True)]
         rows: dict[str, dict[str, Any]] = {}
@@ -215,12 +215,56 @@ class ExternalStack:
                         _save_rows(path, r)
                         rows[keys[i]] = r
         first = rows[keys[0]]
-        return Rollout(times=first["times"],
+        return BatchResult(times=first["times"],
                        ego=np.stack([rows[k]["ego"] for k in keys]),
                        actors=np.stack([rows[k]["actors"] for k in keys]),
                        min_gap=np.stack([rows[k]["min_gap"] for k in keys]),
-                       outcomes=[rows[k]["outcome"] for k in keys], digests={},
+                       outcomes=[rows[k]["outcome"] for k in keys], digests=None,
                        actor_ids=first["actor_ids"])
+
+    def simulate_one(self, scenario: Scenario, params: Mapping[str, float] | None,
+                     seed: int | None, *, output: str | os.PathLike[str] | None = None
+                     ) -> RunResult:
+        """One run: the rows from the batch mode, the recording (when asked for) from the
+        single-run mode, copied to ``output``."""
+        seed = scenario.seed if seed is None else seed
+        r = self.simulate_batch([scenario], [params], [seed])
+        recording, messages = None, 0
+        if output is not None:
+            from rocas.recording.reader import open_recording
+
+            one = self.run(scenario, params, seed)
+            part = f"{os.fspath(output)}.part"
+            shutil.copyfile(one.recording, part)
+            os.replace(part, output)
+            recording = os.fspath(output)
+            messages = sum(1 for _ in open_recording(recording).messages())
+        return RunResult(r.outcomes[0], r.times, r.ego[0], r.actors[0], r.min_gap[0],
+                         recording, messages)
+
+    # -- what the stack the command simulates declares ---------------------------------
+    def _declared(self, what: str, default: Any) -> Any:
+        if self.stack is None:
+            return default
+        from rocas.stacks.registry import get_stack
+
+        return getattr(get_stack(self.stack), what, default)
+
+    @property
+    def modules(self) -> tuple[str, ...]:
+        return tuple(self._declared("modules", tuple(dict.fromkeys(p.module
+                                                                    for p in self.parameters))))
+
+    @property
+    def channels(self) -> tuple[Any, ...]:
+        return tuple(self._declared("channels", ()))
+
+    def __getattr__(self, name: str) -> Any:
+        if name in _DECLARED:  # the stood-in stack's declarations (rocas.stacks.base)
+            found = self._declared(name, None)
+            if found is not None:
+                return found
+        raise AttributeError(name)
 
     def _batch(self, scenarios: Sequence[Scenario], params: Sequence[Mapping[str, float] | None],
                seeds: Sequence[int]) -> list[dict[str, Any]]:
@@ -262,27 +306,9 @@ def _load_rows(path: Path) -> dict[str, Any]:
                 "outcome": outcome_from_record(json.loads(str(z["outcome"])))}
 
 
-#: the stack file whose command stands in for the stack it names (``rocas analyze --stack-file``)
-EXTERNAL_ENV = "ROCAS_EXTERNAL_STACK"
-#: where its results are cached (default: ``rocas-external`` in the system's temporary folder)
-EXTERNAL_CACHE_ENV = "ROCAS_EXTERNAL_CACHE"
-
-
-def external_for(name: str) -> ExternalStack | None:
-    """The external stack that runs stack ``name``'s simulations (``ROCAS_EXTERNAL_STACK``
-    names a stack file with ``stack = name``), or None."""
-    path = os.environ.get(EXTERNAL_ENV)
-    if not path:
-        return None
-    cache = os.environ.get(EXTERNAL_CACHE_ENV) or str(Path(tempfile.gettempdir(),
-                                                            "rocas-external"))
-    ext = _from_file(path, cache)
-    return ext if ext.stack == name else None
-
-
-@functools.cache
-def _from_file(path: str, cache: str) -> ExternalStack:
-    return ExternalStack.from_file(path, cache)
+#: what an external stack takes from the stack its command simulates (``stack = NAME``)
+_DECLARED = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace_limits",
+             "catalog")
 
 
 def read_outcome(path: str | os.PathLike[str]) -> Outcome:

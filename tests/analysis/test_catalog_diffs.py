@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
-from rocas.scenarios.catalog import entries
+from rocas.catalog import entries
+from rocas.rollout import simulate
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 ENTRIES = {e.id: e for e in entries()}

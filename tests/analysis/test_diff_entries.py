@@ -106,10 +106,10 @@ def test_a_crossing_vehicle_that_enters_view_as_a_bus_or_a_truck(tmp_path):
     positions, planning departed at 4.5 s and the walk reached perception at the entry first;
     the synthetic tests above cover that path.)"""
     import rocas.replay as replay_mod
-    from rocas.stacks.ads.run import simulate
+    from rocas.catalog.variants import load_variant
     from rocas.pipeline.physical import apply_physical
     from rocas.pipeline.substitution import second_opinion
-    from rocas.scenarios.variants import load_variant
+    from rocas.rollout import simulate
     from rocas.search.space import Mutation
 
     v = load_variant(ENTERING / "a05_crossing_car_overtake_flip__mixed_s97_k004.toml")

@@ -42,8 +42,8 @@ _STATE: dict = {}
 
 def _pairs(workdir: Path) -> list[tuple[Path, Path, bool]]:
     """(accident, reference, catalog?) for every pair; references simulated into ``workdir``."""
-    from rocas.stacks.ads.run import simulate
-    from rocas.scenarios.catalog import entries
+    from rocas.catalog import entries
+    from rocas.rollout import simulate
 
     out = []
     for e in entries():

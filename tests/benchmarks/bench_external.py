@@ -2,7 +2,7 @@
 not a timed test).
 
 On a lav catalog scenario (default L1, 14 s): one recorded simulation in-process
-(``rocas.stacks.rollout.rollout`` with an output) against the same through the adapter's
+(``rocas.rollout.rollout`` with an output) against the same through the adapter's
 single-run mode (``ExternalStack.run``, a fresh cache each repeat), and a batch of N variants
 (an analysis's generation) in-process (``rollout_batch``) against the adapter's batch mode
 (``ExternalStack.simulate_batch``, split over 1 and 2 processes), per simulation; then a
@@ -44,10 +44,10 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=24)
     args = ap.parse_args()
 
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
+    from rocas.rollout import rollout, rollout_batch
     from rocas.stacks.external import ExternalStack
     from rocas.stacks.registry import get_stack
-    from rocas.stacks.rollout import rollout, rollout_batch
 
     e = entry(args.entry, "lav")
     s, lav, n = e.scenario, get_stack("lav"), args.batch

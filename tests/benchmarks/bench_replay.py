@@ -14,8 +14,8 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from rocas.stacks.ads.run import simulate
 from rocas.replay import replay
+from rocas.rollout import simulate
 from rocas.scenarios import load_example
 
 EXAMPLES = ("left_turn_oncoming", "foggy_crossing", "junction_straight", "roundabout_red_truck",

@@ -25,13 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from rocas.stacks.ads.run import simulate
+from rocas.catalog.variants import load_variant
 from rocas.replay import reconstruct, replay
 from rocas.replay.frames import wrap
-from rocas.scenarios.variants import load_variant
+from rocas.rollout import simulate
 
 ROOT = Path(__file__).resolve().parents[2]
-DEFAULTS = (sorted((ROOT / "rocas/scenarios/catalog").glob("a*.toml"))
+DEFAULTS = (sorted((ROOT / "rocas/catalog").glob("a*.toml"))
             + sorted((ROOT / "tests/scenarios/variants/layouts").glob("*.toml")))
 
 

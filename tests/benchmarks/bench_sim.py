@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[2]
 _CHILD = """
 import json, sys, time
 from rocas.scenarios import load_example
-from rocas.stacks.ads.run import simulate_batch
+from rocas.rollout import simulate_batch
 name, n, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 scenario = load_example(name)
 simulate_batch(scenario, seeds=[0])  # warm caches (map compilation, weights)
@@ -68,7 +68,7 @@ from rocas.stacks.ads.planning import Planning
 from rocas.stacks.ads.prediction import Prediction
 from rocas.sim.oracles import Oracles
 from rocas.scenarios import load_example
-from rocas.stacks.ads.run import simulate_batch
+from rocas.rollout import simulate_batch
 name, n, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 spent = {}
 def timed(label, fn):
@@ -155,7 +155,7 @@ def extract(ref: str, into: Path) -> str:
 
 def recording_mode(scenario_name: str, repeat: int) -> None:
     sys.path.insert(0, str(ROOT))  # this checkout's rocas, as the children import it
-    from rocas.stacks.ads.run import simulate
+    from rocas.rollout import simulate
     from rocas.scenarios import load_example
 
     scenario = load_example(scenario_name)

@@ -34,12 +34,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rocas.stacks.ads.run import simulate
+from rocas.catalog import accident_matches
+from rocas.catalog.variants import load_variant
 from rocas.pipeline.analyze import analyze
 from rocas.pipeline.bench import _expected, _found, score
 from rocas.pipeline.config import AnalyzeConfig
-from rocas.scenarios.catalog import accident_matches
-from rocas.scenarios.variants import load_variant
+from rocas.rollout import simulate
 
 
 def _family(name: str) -> str:

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
+from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
 from rocas.viz.analysis import write_analysis_rrd

@@ -203,7 +203,7 @@ def test_analyze_help_lists_the_executors_and_what_the_seed_seeds(rocas, capsys)
 def test_a_catalog_file_is_a_scenario_and_the_report_shows_replay_and_settings(rocas, tmp_path):
     from importlib import resources
 
-    toml = resources.files("rocas.scenarios") / "catalog" / "a10_skewed_junction_light.toml"
+    toml = resources.files("rocas.catalog") / "ads" / "a10_skewed_junction_light.toml"
     res = rocas("analyze", str(toml), "--scenario", "--out", tmp_path / "run", *SMALL)
     assert res.code == 0, res.stderr
     assert "replay             simulated scenario (emergency at " in res.stdout

@@ -1,7 +1,7 @@
 import json
 
+from rocas.catalog import entries
 from rocas.scenarios import load_scenario as load_scenario_text
-from rocas.scenarios.catalog import entries
 
 
 def test_list_shows_every_entry(rocas):
@@ -55,7 +55,7 @@ def test_unknown_entry_and_bad_count_are_usage_errors(rocas, tmp_path):
 
 
 def test_generate_family_writes_variants_with_their_ground_truth_and_recordings(rocas, tmp_path):
-    from rocas.scenarios.variants import load_variant
+    from rocas.catalog.variants import load_variant
 
     r = rocas("catalog", "generate", "--family", "rotate", "--instances", "1", "--only", "A10",
               "-o", tmp_path, "--record", "--json")
@@ -97,7 +97,7 @@ def test_generate_per_type_tops_each_type_up_from_the_next_family(rocas, monkeyp
     did not make (at most --max-tries draws), and a type still short of K is named on stderr."""
     from types import SimpleNamespace
 
-    import rocas.scenarios.variants as variants
+    import rocas.catalog.variants as variants
 
     asked = []
     kept_by = {("A3", "mixed"): 1, ("A3", "rotate"): 1, ("A10", "mixed"): 3}

@@ -106,7 +106,7 @@ def test_annotate_interrupted_while_copying_leaves_nothing(rocas, monkeypatch, t
 
 
 def test_catalog_record_keeps_the_finished_recordings(rocas, monkeypatch, tmp_path):
-    from rocas.scenarios.catalog import entries
+    from rocas.catalog import entries
 
     first, second = entries()[:2]
     _interrupt_after(monkeypatch, "rocas.stacks.ads.run.simulate", 1)
@@ -121,10 +121,10 @@ def test_catalog_record_keeps_the_finished_recordings(rocas, monkeypatch, tmp_pa
 
 
 def test_catalog_generate_keeps_the_finished_scenario_files(rocas, monkeypatch, tmp_path):
-    from rocas.scenarios.catalog import entries
+    from rocas.catalog import entries
 
     first, second = entries()[:2]
-    _interrupt_after(monkeypatch, "rocas.scenarios.catalog.generate_instances", 1)
+    _interrupt_after(monkeypatch, "rocas.catalog.generate_instances", 1)
     res = rocas("catalog", "generate", "--instances", "1", "-o", tmp_path,
                 "--only", first.id, "--only", second.id)
     assert res.code == 130

@@ -1,9 +1,9 @@
 import io
 import json
 
-from rocas.stacks.ads.params import PARAMETERS
 from rocas.cli.console import Env
 from rocas.cli.main import main
+from rocas.stacks.ads.params import PARAMETERS
 
 
 def _run(*argv):

@@ -16,8 +16,8 @@ from fuzz.structural import (
     run_diff,
 )
 
-from rocas.stacks.ads.run import simulate
-from rocas.scenarios.catalog import entries
+from rocas.catalog import entries
+from rocas.rollout import simulate
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 

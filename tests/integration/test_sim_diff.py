@@ -2,8 +2,8 @@
 
 import pytest
 
-from rocas.stacks.ads.run import simulate
 from rocas.analysis import diff
+from rocas.rollout import simulate
 from rocas.scenarios import load_example
 
 

@@ -258,10 +258,10 @@ def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_sh
     import rocas.pipeline.substitution as substitution
     from rocas.pipeline import AnalyzeConfig, analyze
     from rocas.pipeline.physical import apply_physical
+    from rocas.rollout import simulate
     from rocas.scenarios import load_example
     from rocas.search import SerialExecutor
     from rocas.search.space import Mutation
-    from rocas.stacks.rollout import simulate
 
     events = []
     real = substitution.second_opinion

@@ -6,10 +6,10 @@ a race instead of removing the cause)."""
 import numpy as np
 import pytest
 
-from rocas.stacks.ads.params import BRAKING_LIMITS, PACE_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
 from rocas.errors import UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.search.space import Mutation
+from rocas.stacks.ads.params import BRAKING_LIMITS, PACE_LIMITS, PARAMETERS, SENSING_LIMITS, parameters
 
 
 def test_the_space_is_the_module_without_its_braking_limits():

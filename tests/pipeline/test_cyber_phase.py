@@ -147,10 +147,10 @@ def _short_run(tmp_path, executor):
     """A run of a three-second A9 whose cyber search is small (budget 40)."""
     import dataclasses
 
+    from rocas.catalog import entries
     from rocas.pipeline.config import AnalyzeConfig
     from rocas.pipeline.evaluate import VariantTask, run_batch
     from rocas.pipeline.rundir import Run, noop
-    from rocas.scenarios.catalog import entries
 
     scn = dataclasses.replace(next(e for e in entries() if e.id == "A9").scenario, duration_s=3.0)
     run = Run(tmp_path, AnalyzeConfig(budget=40, population=8), executor, noop,

@@ -43,7 +43,7 @@ def test_recordings_ride_in_the_first_batch_and_move_no_bit(tmp_path):
     them."""
     import dataclasses
 
-    from rocas.stacks.ads.run import simulate
+    from rocas.rollout import simulate
     from rocas.scenarios import load_example
     from rocas.search import SerialExecutor
 

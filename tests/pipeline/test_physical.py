@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from rocas.catalog import entry
 from rocas.pipeline.evaluate import VariantResult
 from rocas.pipeline.physical import (
     SCREEN_FRACTIONS,
@@ -16,7 +17,6 @@ from rocas.pipeline.physical import (
     screening_mutants,
 )
 from rocas.pipeline.physical_phase import shared_prefix_s
-from rocas.scenarios.catalog import entry
 from rocas.search.space import Mutation
 
 

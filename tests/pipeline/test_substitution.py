@@ -2,10 +2,10 @@
 
 import pytest
 
-from rocas.stacks.ads.oracle import SUBSTITUTABLE
-from rocas.stacks.ads.run import simulate_batch
+from rocas.catalog import accident_matches, entries, entry
 from rocas.pipeline.substitution import second_opinion
-from rocas.scenarios.catalog import accident_matches, entries, entry
+from rocas.rollout import simulate_batch
+from rocas.stacks.ads.oracle import SUBSTITUTABLE
 
 
 @pytest.fixture(scope="module")

@@ -7,6 +7,7 @@ import random
 import numpy as np
 import pytest
 
+from rocas.catalog import entry
 from rocas.pipeline.physical import physical_space
 from rocas.pipeline.physical_phase import (
     F2_TOLERANCE_M2,
@@ -16,7 +17,6 @@ from rocas.pipeline.physical_phase import (
     encounter_kept,
     f2_tolerance,
 )
-from rocas.scenarios.catalog import entry
 from rocas.search.ga import Candidate
 from rocas.search.space import Mutation
 

@@ -142,7 +142,7 @@ def test_an_interrupted_validation_resumes_after_its_last_finished_slice(tmp_pat
 
     # fixed.mcap is recorded by phase V as an extra row of its first batch: the file the fix's
     # run alone writes; a resumed run whose recording is missing records it again
-    from rocas.stacks.ads.run import simulate
+    from rocas.rollout import simulate
 
     fix = json.loads((out / "cyber.json").read_text())["fix"]
     simulate(red_truck, fix, output=tmp_path / "fixed_alone.mcap")

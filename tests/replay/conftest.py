@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rocas.stacks.ads.run import RunResult, simulate
+from rocas.rollout import RunResult, simulate
 from rocas.scenarios import load_example
 
 #: example -> simulated seconds (enough to include its accident)

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 import rocas
-from rocas.stacks.ads.topics import TOPIC_OBSTACLES, TOPIC_POSE, WORLD_ATTACHMENT
 from rocas.errors import RecordingError
 from rocas.msgs import localization_pb2
 from rocas.recording.writer import RecordingWriter
 from rocas.replay import reconstruct
 from rocas.scenarios import load_example
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict, world_to_dict
+from rocas.stacks.ads.topics import TOPIC_OBSTACLES, TOPIC_POSE, WORLD_ATTACHMENT
 
 
 def test_rocas_replay_is_callable_and_returns_the_scenario(recorded):
@@ -57,7 +57,7 @@ def test_world_ego_and_actor_identity(recorded):
 
 def test_actor_trajectories_match_the_ground_truth(recorded):
     """Perception (ego frame) -> world: replayed actors drive where the originals drove."""
-    from rocas.stacks.ads.run import simulate
+    from rocas.rollout import simulate
 
     rec = recorded("roundabout_red_truck")
     r = reconstruct(rec.path)

@@ -5,11 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rocas.stacks.ads.run import simulate
+from rocas.catalog.variants import load_variant
 from rocas.replay import reconstruct, replay
 from rocas.replay.reconstruction import AccidentInfo
 from rocas.replay.run import same_accident, trajectory_error
-from rocas.scenarios.variants import load_variant
+from rocas.rollout import simulate
 
 VARIANTS = Path(__file__).resolve().parents[1] / "scenarios" / "variants" / "rigid_s0"
 

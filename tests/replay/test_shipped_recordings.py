@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
+from rocas.catalog import entries
 from rocas.replay import replay
-from rocas.scenarios.catalog import entries
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 ENTRIES = {e.id: e for e in entries()}

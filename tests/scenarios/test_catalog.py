@@ -9,10 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rocas.stacks.ads.params import PARAMETERS
-from rocas.stacks.ads.run import simulate_batch
-from rocas.recording.reader import open_recording
-from rocas.scenarios.catalog import (
+from rocas.catalog import (
     PRE_ACCIDENT_MARGIN_S,
     PRE_ACCIDENT_RMSE_M,
     _jittered,
@@ -26,7 +23,10 @@ from rocas.scenarios.catalog import (
     scenario_toml,
     trajectory_rmse,
 )
+from rocas.recording.reader import open_recording
+from rocas.rollout import simulate_batch
 from rocas.scenarios.loader import scenario_from_dict
+from rocas.stacks.ads.params import PARAMETERS
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 ENTRIES = entries()
@@ -158,7 +158,7 @@ def _truth_doc(**changes):  # noqa: ANN003, ANN202
     import tomllib
     from importlib import resources
 
-    text = resources.files("rocas.scenarios.catalog").joinpath(f"{entry('A5').key}.toml")
+    text = resources.files("rocas.catalog").joinpath("ads", f"{entry('A5').key}.toml")
     return {**tomllib.loads(text.read_text())["ground_truth"], **changes}
 
 
@@ -169,8 +169,8 @@ def _truth_doc(**changes):  # noqa: ANN003, ANN202
     ({"fix": {}, "fixable": False}, "unfixable entry has no alternative"),
 ])
 def test_alternative_fixes_are_validated(changes, message):
+    from rocas.catalog import _truth
     from rocas.errors import ScenarioError
-    from rocas.scenarios.catalog import _truth
 
     with pytest.raises(ScenarioError, match=message):
         _truth(_truth_doc(**changes), "a05.toml")

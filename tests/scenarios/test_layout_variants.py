@@ -1,7 +1,7 @@
 """The hand-authored layout variants (tests/scenarios/variants/layouts/): each catalog mechanism
 re-authored on another road geometry, as a held-out-like set to measure rocas against.
 
-Each file is re-simulated the way generated variants are kept (rocas.scenarios.variants): the
+Each file is re-simulated the way generated variants are kept (rocas.catalog.variants): the
 defaults crash with the documented consequence and partner, every documented fix repairs it
 (no collision or emergency, the ego within 0.5 m RMSE of the accident run until 3 s before it),
 and the reference mutation in its ground truth avoids it."""
@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
+from rocas.catalog import accident_matches, fix_holds, mutate
+from rocas.catalog.variants import load_variant, source_entry
+from rocas.rollout import simulate_batch
 from rocas.stacks.ads.params import PARAMETERS
-from rocas.stacks.ads.run import simulate_batch
-from rocas.scenarios.catalog import accident_matches, fix_holds, mutate
-from rocas.scenarios.variants import load_variant, source_entry
 
 LAYOUTS = Path(__file__).parent / "variants" / "layouts"
 FILES = sorted(LAYOUTS.glob("*.toml"))

@@ -75,16 +75,22 @@ def test_errors_name_file_key_reason(tmp_path, extra, key, reason):
     assert str(p) in msg and key in msg and reason in msg
 
 
-def test_ego_param_overrides_are_validated(tmp_path):
+def test_ego_param_overrides_are_validated_against_the_stack_by_the_rollout(tmp_path):
+    from rocas.rollout import load_scenario as load_checked
+
     ok = BASE + "[ego.params.planning]\nyield_distance_m = 3.0\n"
-    s = load_scenario(_write(tmp_path, ok))
+    s = load_checked(str(_write(tmp_path, ok)))
     assert s.ego.overrides == {"planning.yield_distance_m": 3.0}
     bad = BASE + "[ego.params.planning]\nyield_distance_m = 300.0\n"
-    with pytest.raises(ScenarioError, match="ego.params.planning.yield_distance_m"):
-        load_scenario(_write(tmp_path, bad))
+    assert load_scenario(_write(tmp_path, bad)).ego.overrides  # the format: a number
+    with pytest.raises(ScenarioError, match="ego.params: planning.yield_distance_m: 300"):
+        load_checked(str(_write(tmp_path, bad)))
     unknown = BASE + "[ego.params.planning]\nnope = 1\n"
-    with pytest.raises(ScenarioError, match="unknown ADS parameter"):
-        load_scenario(_write(tmp_path, unknown))
+    with pytest.raises(ScenarioError, match="planning.nope: unknown parameter"):
+        load_checked(str(_write(tmp_path, unknown)))
+    text = BASE + '[ego.params.planning]\nyield_distance_m = "x"\n'
+    with pytest.raises(ScenarioError, match="ego.params.planning.yield_distance_m"):
+        load_scenario(_write(tmp_path, text))
 
 
 def test_bad_toml_and_missing_file(tmp_path):
@@ -95,7 +101,7 @@ def test_bad_toml_and_missing_file(tmp_path):
 
 
 def test_roundabout_is_expressible_and_a9_depends_on_the_brake_threshold():
-    from rocas.stacks.ads.run import simulate_batch
+    from rocas.rollout import simulate_batch
 
     s = load_example("roundabout_red_truck")
     ring = ["ring_se", "ring_ne", "ring_nw", "ring_sw"]
@@ -109,7 +115,7 @@ def test_roundabout_is_expressible_and_a9_depends_on_the_brake_threshold():
 def test_a_derived_light_facing_survives_the_round_trip():
     # found by the property test: a light without facing_deg faces against its stop lane, and the
     # written degrees (9 decimals) must read back to the same radians
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
     from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 
     e = entry("A10")
@@ -123,16 +129,16 @@ def test_a_derived_light_facing_survives_the_round_trip():
 def test_a_catalog_file_loads_as_its_scenario():
     from importlib import resources
 
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
 
-    path = resources.files("rocas.scenarios") / "catalog" / "a10_skewed_junction_light.toml"
+    path = resources.files("rocas.catalog") / "ads" / "a10_skewed_junction_light.toml"
     assert load_scenario(path) == entry("A10").scenario
 
 
 def test_check_ranges_false_reads_back_what_a_mutation_made():
     """An external stack reads the scenarios rocas simulates: a mutated actor may start past
     its track's end, which only ``check_ranges=False`` accepts (every other check stays)."""
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
     from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 
     doc = scenario_to_dict(entry("A9").scenario)

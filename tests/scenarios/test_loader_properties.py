@@ -12,10 +12,12 @@ import tomllib
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rocas.stacks.ads.params import PARAMETERS, parse_assignment, validate_param
+from rocas.catalog import entries
 from rocas.errors import ScenarioError
 from rocas.scenarios import example_names, load_example, scenario_from_dict, scenario_to_dict
-from rocas.scenarios.catalog import entries
+from rocas.stacks.ads.params import PARAMETERS, parameters
+from rocas.stacks.base import parse_assignment as parse_any
+from rocas.stacks.base import validate_value
 
 SOURCE = "fuzz.toml"
 #: Documents mutated by the tests: every example and catalog scenario.
@@ -124,7 +126,7 @@ names = st.one_of(st.sampled_from(sorted(PARAMETERS)), st.text(max_size=30))
 @given(names, st.one_of(scalars, st.lists(scalars, max_size=2)))
 def test_a_parameter_override_is_in_range_or_refused_naming_it(name, value):
     try:
-        v = validate_param(name, value, source=SOURCE)
+        v = validate_value(PARAMETERS, name, value, source=SOURCE)
     except ScenarioError as exc:
         assert str(exc).startswith(f"{SOURCE}: {name}: "), str(exc)
         return
@@ -138,7 +140,7 @@ def test_a_parameter_override_is_in_range_or_refused_naming_it(name, value):
 @given(st.text(max_size=40))
 def test_a_set_assignment_parses_or_is_refused_naming_it(text):
     try:
-        name, v = parse_assignment(text)
+        name, v = parse_any(text, tuple(parameters()))
     except ScenarioError as exc:
         assert str(exc).startswith("--set"), str(exc)
         return

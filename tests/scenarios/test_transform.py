@@ -8,8 +8,9 @@ import math
 
 import pytest
 
-from rocas.scenarios.catalog import accident_time, entries, entry, mutate
-from rocas.scenarios.loader import polyline_length, scenario_from_dict, scenario_to_dict
+from rocas.catalog import accident_time, entries, entry, mutate
+from rocas.geometry import polyline_length
+from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 from rocas.scenarios.model import Scenario
 from rocas.scenarios.transform import PlaneTransform, transform_change, transform_scenario
 
@@ -127,7 +128,7 @@ _CLASSIFIER_YAW = pytest.mark.xfail(strict=True, reason="the brake classifier is
 @pytest.mark.parametrize("type_id", [pytest.param(i, marks=_CLASSIFIER_YAW) if i in ("A6", "A9")
                                      else i for i in IDS])
 def test_a_rotated_catalog_accident_is_the_same_accident_within_a_tick(type_id):
-    from rocas.stacks.ads.run import simulate_batch
+    from rocas.rollout import simulate_batch
 
     e = entry(type_id)
     turned = transform_scenario(e.scenario, PlaneTransform.rotation(math.radians(90.0),

@@ -7,11 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rocas.stacks.ads.run import simulate_batch
-from rocas.errors import UsageError
-from rocas.scenarios.catalog import accident_matches, entry, fix_holds
-from rocas.scenarios.loader import scenario_to_dict
-from rocas.scenarios.variants import (
+from rocas.catalog import accident_matches, entry, fix_holds
+from rocas.catalog.variants import (
     FAMILIES,
     draw_variant,
     generate_variants,
@@ -19,6 +16,9 @@ from rocas.scenarios.variants import (
     source_entry,
     variant_toml,
 )
+from rocas.errors import UsageError
+from rocas.rollout import simulate_batch
+from rocas.scenarios.loader import scenario_to_dict
 
 
 def _draw(type_id: str, family: str, k: int = 0):  # noqa: ANN202

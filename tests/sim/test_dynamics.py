@@ -64,7 +64,7 @@ def test_counter_rng_is_independent_of_batch_composition():
 def test_case_study_truck_heading_departs_from_its_path_tangent_more_when_wet():
     import dataclasses
 
-    from rocas.stacks.ads.run import simulate_batch
+    from rocas.rollout import simulate_batch
     from rocas.scenarios import load_example
 
     s = load_example("wet_truck_turn")

@@ -1,6 +1,6 @@
 """The simulator's output is bit-identical on every machine.
 
-Each catalog scenario's fingerprint (rocas.stacks.ads.fingerprint: trajectories, oracle outcomes,
+Each catalog scenario's fingerprint (rocas.rollout.fingerprint: trajectories, oracle outcomes,
 module output digests and, for the accidents, every published message) is stored in
 fingerprints.json. A change of arithmetic that moves any bit fails here; regenerate with
 ``python tests/sim/test_fingerprints.py --update`` and regenerate the shipped recordings
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from rocas.stacks.ads.fingerprint import run_fingerprint
-from rocas.scenarios.catalog import entries
+from rocas.catalog import entries
+from rocas.rollout.fingerprint import run_fingerprint
 
 STORED = Path(__file__).with_name("fingerprints.json")
 ENTRIES = {e.id: e for e in entries()}
@@ -46,8 +46,8 @@ def test_catalog_fingerprints_match_the_stored_ones(type_id):
 
 _CHILD = """
 import json, sys
-from rocas.scenarios.catalog import entry
-from rocas.stacks.ads.fingerprint import run_fingerprint
+from rocas.catalog import entry
+from rocas.rollout.fingerprint import run_fingerprint
 print(json.dumps([run_fingerprint(entry(t).scenario) for t in sys.argv[1:]]))
 """
 

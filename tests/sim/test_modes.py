@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from rocas.stacks.ads.run import simulate, simulate_batch
-from rocas.stacks.ads.topics import CHANNELS, EGO_METADATA, WORLD_ATTACHMENT
 from rocas.recording.reader import open_recording
+from rocas.rollout import simulate, simulate_batch
 from rocas.scenarios import load_example, scenario_from_dict
+from rocas.stacks.ads.topics import CHANNELS, EGO_METADATA, WORLD_ATTACHMENT
 
 
 @pytest.fixture(scope="module")
@@ -103,8 +103,8 @@ def test_a_variant_is_the_same_beside_variants_whose_paths_are_longer_or_shorter
     """Actor paths are sampled per variant: a lateral offset or a start moved makes a path
     longer or shorter, and a batch-wide sample count used to move the other variants' actors
     by up to 1e-7 m (catalog A4, an offset of 0.9 m: every output digest of its row changed)."""
+    from rocas.catalog import entry
     from rocas.pipeline.physical import apply_physical
-    from rocas.scenarios.catalog import entry
     from rocas.search.space import Mutation
 
     scn = entry("A4").scenario

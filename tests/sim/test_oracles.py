@@ -1,6 +1,6 @@
 import dataclasses
 
-from rocas.stacks.ads.run import simulate, simulate_batch
+from rocas.rollout import simulate, simulate_batch
 from rocas.scenarios import load_example, scenario_from_dict
 
 ROAD = {

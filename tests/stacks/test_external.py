@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rocas.catalog import entry
 from rocas.errors import UsageError
 from rocas.recording.reader import open_recording
-from rocas.scenarios.catalog import entry
+from rocas.rollout import rollout
 from rocas.stacks.external import ExternalStack
 from rocas.stacks.registry import get_stack
-from rocas.stacks.rollout import rollout
 
 STACK_FILE = Path(__file__).with_name("lav-process.toml")
 
@@ -36,13 +36,13 @@ def test_the_external_process_gives_what_the_stack_gives_in_process(tmp_path):
     params = {"brake.brake_threshold": 0.5}
     first = ext.run(s, params, 4)
     inproc = rollout(get_stack("lav"), s, params, 4, output=tmp_path / "in.mcap")
-    assert not first.cached and first.outcome == inproc.outcomes[0]
+    assert not first.cached and first.outcome == inproc.outcome
     assert _messages(first.recording) == _messages(tmp_path / "in.mcap")
     again = ext.run(s, params, 4)
     assert again.cached and again.recording == first.recording
     batch = ext.run_batch([s, s], [params, None], [4, 5], processes=2)
     assert batch[0].cached and not batch[1].cached
-    assert batch[1].outcome == rollout(get_stack("lav"), s, None, 5).outcomes[0]
+    assert batch[1].outcome == rollout(get_stack("lav"), s, None, 5).outcome
 
 
 def test_a_failing_command_is_reported_in_one_line(tmp_path):
@@ -57,8 +57,8 @@ def test_a_failing_command_is_reported_in_one_line(tmp_path):
 def test_the_batch_mode_gives_the_in_process_rows_and_is_cached(tmp_path, monkeypatch):
     """What an analysis reads through the adapter (trajectories, gaps, outcomes of a batch)
     is bit-identical to the in-process batch, and a repeated batch starts no process."""
+    from rocas.rollout import simulate_batch
     from rocas.stacks import external
-    from rocas.stacks.rollout import simulate_batch
 
     ext = dataclasses.replace(_stack(tmp_path), stack="lav")
     e = entry("L3", "lav")
@@ -84,16 +84,23 @@ def test_the_batch_mode_gives_the_in_process_rows_and_is_cached(tmp_path, monkey
     assert again.outcomes == inproc.outcomes
 
 
-def test_simulations_go_through_the_adapter_only_for_the_stack_it_names(tmp_path, monkeypatch):
-    from rocas.stacks.external import EXTERNAL_CACHE_ENV, EXTERNAL_ENV, external_for
+def test_a_registered_external_stack_simulates_itself_with_the_declarations_it_stands_for(
+        tmp_path):
+    from rocas.rollout import drive_with, simulate
+    from rocas.stacks import registry
+    from rocas.stacks.base import SelfSimulating
 
-    monkeypatch.delenv(EXTERNAL_ENV, raising=False)
-    assert external_for("lav") is None
-    monkeypatch.setenv(EXTERNAL_ENV, str(STACK_FILE))
-    monkeypatch.setenv(EXTERNAL_CACHE_ENV, str(tmp_path))
-    ext = external_for("lav")
-    assert ext is not None and ext.name == "lav-process" and ext.cache_dir == tmp_path
-    assert external_for("ads") is None
+    ext = _stack(tmp_path)
+    registry.register(ext, replace=True)
+    assert registry.get_stack("lav-process") is ext and isinstance(ext, SelfSimulating)
+    lav = registry.get_stack("lav")
+    assert ext.modules == lav.modules and ext.pace_limits == lav.pace_limits
+    assert not getattr(ext, "substitutable", ())  # not declared by lav: not taken
+    s = dataclasses.replace(drive_with(entry("A9").scenario, "lav"), duration_s=1.0)
+    mine = simulate(drive_with(s, "lav-process"), seed=0)
+    theirs = simulate(s, seed=0)
+    np.testing.assert_array_equal(mine.ego, theirs.ego)
+    assert registry.portable()[-1] is ext
 
 
 def test_analyze_refuses_a_stack_file_for_another_stack(rocas, tmp_path):

@@ -10,10 +10,10 @@ import pytest
 from rocas.errors import ScenarioError, UsageError
 from rocas.pipeline.cyber import cyber_space
 from rocas.pipeline.evaluate import VariantTask, run_batch
+from rocas.rollout import check_params, rollout_batch, simulate, with_stack
 from rocas.scenarios import load_example
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
 from rocas.stacks.registry import get_stack
-from rocas.stacks.rollout import rollout_batch, simulate, with_stack
 
 
 def _lav(duration=9.0):
@@ -30,11 +30,11 @@ def test_a_scenario_names_its_stack_and_its_overrides_are_that_stacks():
     back = scenario_from_dict(d)
     assert back.ego.stack == "lav" and back.ego.overrides == {"brake.brake_threshold": 0.5}
     d["ego"]["params"] = {"perception": {"brake_threshold": 0.5}}  # the ADS's name
-    with pytest.raises(ScenarioError, match="unknown parameter of stack 'lav'"):
-        scenario_from_dict(d)
+    with pytest.raises(ScenarioError, match="ego.params: perception.brake_threshold: unknown"):
+        check_params(scenario_from_dict(d))
     d["ego"]["params"], d["ego"]["stack"] = {}, "nope"
-    with pytest.raises(ScenarioError, match="unknown stack"):
-        scenario_from_dict(d)
+    with pytest.raises(ScenarioError, match="ego.stack: unknown stack 'nope'"):
+        check_params(scenario_from_dict(d))
 
 
 def test_with_stack_refuses_another_stacks_overrides():

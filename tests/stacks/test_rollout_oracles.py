@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas.rollout import rollout_batch
 from rocas.scenarios import scenario_from_dict
 from rocas.stacks.base import Actuation, Observation
-from rocas.stacks.rollout import rollout_batch
 
 ROAD = {
     "scenario": {"name": "brake_and_hold", "duration_s": 8.0},

@@ -6,11 +6,11 @@ import dataclasses
 import numpy as np
 import pytest
 
+from rocas.catalog import entry
 from rocas.errors import ScenarioError, UsageError
-from rocas.scenarios.catalog import entry
+from rocas.rollout import rollout, rollout_batch
 from rocas.stacks import registry
 from rocas.stacks.base import Stack, StackParams
-from rocas.stacks.rollout import rollout, rollout_batch
 
 
 def _short(scenario, duration=4.0):
@@ -56,15 +56,17 @@ def test_a_lav_variant_is_the_same_whatever_the_batch():
     batch = rollout_batch(lav, [s] * 3, params, [1, 2, 3])
     for i in range(3):
         one = rollout(lav, s, params[i], [1, 2, 3][i])
-        np.testing.assert_array_equal(one.ego[0], batch.ego[i])
-        for name, value in one.digests.items():
-            assert value[0] == batch.digests[name][i]
+        np.testing.assert_array_equal(one.ego, batch.ego[i])
+    tracked = rollout_batch(lav, [s] * 3, params, [1, 2, 3], track_outputs=True)
+    alone = rollout_batch(lav, [s], [params[1]], [2], track_outputs=True)
+    np.testing.assert_array_equal(tracked.digests[1], alone.digests[0])
     # a parameter the planner reads changes the planner's output and the ego's course
-    assert batch.digests["planner"][1] != batch.digests["planner"][0]
+    planner = lav.modules.index("planner")
+    assert tracked.digests[1, planner] != tracked.digests[0, planner]
 
 
 def test_the_built_in_ads_through_the_protocol_drives_as_the_engine_does():
-    from rocas.stacks.ads.run import simulate_batch
+    from rocas.rollout import simulate_batch
 
     s = _short(entry("A1").scenario, 3.0)
     ours = rollout_batch(registry.get_stack("ads"), [s], None, [0])
@@ -86,5 +88,5 @@ def test_a_lav_recording_carries_its_topology_world_and_stack_name(tmp_path):
     assert topics["/lav/control/command"].metadata["rocas.role"] == "control"
     meta = dict(rec.metadata)
     assert meta["rocas.stack"] == {"name": "lav"}
-    assert meta["rocas.run"]["outcome"] == res.outcomes[0].summary()
+    assert meta["rocas.run"]["outcome"] == res.outcome.summary()
     assert rec.attachment("rocas/world.json") is not None

@@ -7,8 +7,8 @@ import pytest
 from foreign_stack import make_pair
 from rrd import read_rrd
 
-from rocas.stacks.ads.run import simulate
 from rocas.recording.reader import open_recording
+from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
 from rocas.viz.scene import actor_names, light_color_at, load_execution, log_scene

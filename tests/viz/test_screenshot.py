@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from foreign_stack import make_pair
 
-from rocas.stacks.ads.run import simulate
 from rocas.analysis import diff
+from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.viz.analysis import write_analysis_rrd
 from rocas.viz.diff import ORANGE, RED, write_diff_rrd

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from rrd import read_rrd
 
-from rocas.stacks.ads.run import simulate
 from rocas.analysis.diff import diff
+from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
 from rocas.viz.analysis import log_run_dir, write_analysis_rrd, write_run_dir_rrd

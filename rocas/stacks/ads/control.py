@@ -8,10 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.stacks.ads.localization import ChassisOutput, LocalizationOutput
-from rocas.stacks.ads.planning import PlanningOutput
 from rocas.sim.geometry import _arange, clip, wrap_angle
 from rocas.sim.world import BatchWorld
+from rocas.stacks.ads.localization import ChassisOutput, LocalizationOutput
+from rocas.stacks.ads.planning import PlanningOutput
 
 
 @dataclass(frozen=True, eq=False)

@@ -26,6 +26,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocas.sim.actors import ActorState, step_actors
+from rocas.sim.dynamics import VehicleState
+from rocas.sim.geometry import clip, wrap_angle
+from rocas.sim.world import (
+    KIND_BOX,
+    KIND_CONE,
+    KIND_CYCLIST,
+    KIND_PEDESTRIAN,
+    BatchWorld,
+    project_on_reference,
+    road_friction,
+)
 from rocas.stacks.ads import classifier
 from rocas.stacks.ads.localization import LocalizationOutput
 from rocas.stacks.ads.perception import (
@@ -50,18 +62,6 @@ from rocas.stacks.ads.prediction import (
     MAX_POINTS,
     PredictionOutput,
     perceived_world_state,
-)
-from rocas.sim.actors import ActorState, step_actors
-from rocas.sim.dynamics import VehicleState
-from rocas.sim.geometry import clip, wrap_angle
-from rocas.sim.world import (
-    KIND_BOX,
-    KIND_CONE,
-    KIND_CYCLIST,
-    KIND_PEDESTRIAN,
-    BatchWorld,
-    project_on_reference,
-    road_friction,
 )
 
 #: Modules that have a ground-truth substitute, in data-flow order.

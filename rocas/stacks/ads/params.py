@@ -7,11 +7,6 @@ immutable mapping name -> value with every parameter present; a batch of N param
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-
-import numpy as np
-
-from rocas.errors import ScenarioError
 from rocas.stacks.base import ParamSpec
 
 MODULES = ("localization", "canbus", "perception", "prediction", "planning", "control")
@@ -335,107 +330,5 @@ def parameters(module: str | None = None) -> list[Param]:
     return [p for p in _INVENTORY if module is None or p.module == module]
 
 
-class ParamSet(Mapping[str, float]):
-    """An immutable, hashable, picklable full parameter assignment (defaults + overrides)."""
-
-    __slots__ = ("_values",)
-
-    def __init__(self, overrides: Mapping[str, float] | None = None, *, source: str = "overrides"
-                 ) -> None:
-        values = {name: float(p.default) for name, p in PARAMETERS.items()}
-        for name, value in (overrides or {}).items():
-            values[name] = validate_param(name, value, source=source)
-        self._values = tuple(values[n] for n in PARAMETERS)
-
-    def __getitem__(self, name: str) -> float:
-        try:
-            return self._values[_INDEX[name]]
-        except KeyError:
-            raise KeyError(name) from None
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(PARAMETERS)
-
-    def __len__(self) -> int:
-        return len(self._values)
-
-    def __hash__(self) -> int:
-        return hash(self._values)
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, ParamSet) and other._values == self._values
-
-    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
-        return (ParamSet, (self.overrides(),))
-
-    def overrides(self) -> dict[str, float]:
-        """Only the values that differ from the defaults."""
-        return {n: v for n, v in zip(PARAMETERS, self._values, strict=True)
-                if v != PARAMETERS[n].default}
-
-    def replace(self, **changes: float) -> ParamSet:
-        """A copy with ``module__name=value`` (double underscore) or use :meth:`with_values`."""
-        return self.with_values({k.replace("__", ".", 1): v for k, v in changes.items()})
-
-    def with_values(self, changes: Mapping[str, float]) -> ParamSet:
-        return ParamSet({**self.overrides(), **changes})
-
-    def as_array(self) -> np.ndarray:
-        """Values in inventory order, shape (P,)."""
-        return np.asarray(self._values, dtype=np.float64)
-
-
-_INDEX = {name: i for i, name in enumerate(PARAMETERS)}
-
-
-def validate_param(name: str, value: object, *, source: str = "overrides") -> float:
-    """Check a parameter name and value; raise :class:`ScenarioError` naming both."""
-    p = PARAMETERS.get(name)
-    if p is None:
-        close = [n for n in PARAMETERS if n.split(".")[-1] == name.split(".")[-1]]
-        hint = f"did you mean {close[0]}?" if close else "see 'rocas params'"
-        raise ScenarioError(f"{source}: {name}: unknown ADS parameter", hint)
-    if isinstance(value, bool):
-        value = float(value)
-    if not isinstance(value, int | float):
-        try:
-            value = float(value)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            raise ScenarioError(f"{source}: {name}: expected a number, got {value!r}") from None
-    v = float(value)
-    if not p.low <= v <= p.high:
-        raise ScenarioError(f"{source}: {name}: {v:g} is out of range [{p.low:g}, {p.high:g}] "
-                            f"{p.unit}".rstrip())
-    if p.is_integer and v != round(v):
-        raise ScenarioError(f"{source}: {name}: expected an integer, got {v:g}")
-    return v
-
-
-def parse_assignment(text: str) -> tuple[str, float]:
-    """Parse ``module.param=value`` (as given to ``--set``)."""
-    name, sep, raw = text.partition("=")
-    if not sep:
-        raise ScenarioError(f"--set {text}: expected module.param=value")
-    name = name.strip()
-    raw = raw.strip().lower()
-    if not name or not raw:
-        raise ScenarioError(f"--set {text}: expected module.param=value")
-    value: float
-    if raw in ("true", "false"):
-        value = float(raw == "true")
-    else:
-        try:
-            value = float(raw)
-        except ValueError:
-            raise ScenarioError(f"--set {text}: {raw!r} is not a number") from None
-    return name, validate_param(name, value, source="--set")
-
-
-def stack_params(sets: Sequence[ParamSet]) -> dict[str, np.ndarray]:
-    """N parameter sets -> ``{name: array (N,)}`` (float64)."""
-    table = np.stack([s.as_array() for s in sets]) if sets else np.zeros((0, len(PARAMETERS)))
-    return {name: np.ascontiguousarray(table[:, i]) for i, name in enumerate(PARAMETERS)}
-
-
-__all__ = ["MODULES", "PARAMETERS", "Param", "ParamSet", "parameters", "parse_assignment",
-           "stack_params", "validate_param"]
+__all__ = ["BRAKING_LIMITS", "MODULES", "PACE_LIMITS", "PARAMETERS", "SENSING_LIMITS", "Param",
+           "parameters"]

@@ -13,8 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
-from rocas.stacks.ads import classifier
-from rocas.stacks.ads.localization import LocalizationOutput
 from rocas.sim import rng
 from rocas.sim.geometry import clip, segments_blocked_by_edge, wrap_angle
 from rocas.sim.world import (
@@ -25,6 +23,8 @@ from rocas.sim.world import (
     LIGHT_CODES,
     BatchWorld,
 )
+from rocas.stacks.ads import classifier
+from rocas.stacks.ads.localization import LocalizationOutput
 
 # PerceptionObstacle.Type / SubType codes (see perception.proto)
 T_UNKNOWN_MOVABLE, T_UNKNOWN_UNMOVABLE, T_PEDESTRIAN, T_BICYCLE, T_VEHICLE = 1, 2, 3, 4, 5

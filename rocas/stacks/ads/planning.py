@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
+from rocas.sim.geometry import box_gap, clip, wrap_angle
+from rocas.sim.world import REF_SPACING_M, BatchWorld, project_on_reference, reference_at
 from rocas.stacks.ads.localization import ChassisOutput, LocalizationOutput
 from rocas.stacks.ads.perception import (
     T_BICYCLE,
@@ -21,8 +23,6 @@ from rocas.stacks.ads.perception import (
     PerceptionOutput,
 )
 from rocas.stacks.ads.prediction import PredictionOutput
-from rocas.sim.geometry import box_gap, clip, wrap_angle
-from rocas.sim.world import REF_SPACING_M, BatchWorld, project_on_reference, reference_at
 
 MAX_POINTS = 41
 # ObjectDecision.Type

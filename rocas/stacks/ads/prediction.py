@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rocas import numerics
+from rocas.sim.geometry import clip, nearest_on, wrap_angle
+from rocas.sim.world import BatchWorld
 from rocas.stacks.ads.localization import LocalizationOutput
 from rocas.stacks.ads.perception import (
     T_BICYCLE,
@@ -19,8 +21,6 @@ from rocas.stacks.ads.perception import (
     T_UNKNOWN_UNMOVABLE,
     PerceptionOutput,
 )
-from rocas.sim.geometry import clip, nearest_on, wrap_angle
-from rocas.sim.world import BatchWorld
 
 #: Cyclists are matched to a lane this much farther from its centre than vehicles [m].
 CYCLIST_EXTRA_LANE_DISTANCE_M = 1.0

@@ -13,6 +13,16 @@ import math
 
 import numpy as np
 
+from rocas.msgs import (
+    chassis_pb2,
+    control_pb2,
+    localization_pb2,
+    perception_pb2,
+    planning_pb2,
+    prediction_pb2,
+)
+from rocas.sim.protocol import MessageSink
+from rocas.sim.world import COLOR_NAMES, BatchWorld
 from rocas.stacks.ads.planning import REASONS
 from rocas.stacks.ads.stack import TickOutputs
 from rocas.stacks.ads.topics import (
@@ -31,16 +41,6 @@ from rocas.stacks.ads.topics import (
     TOPIC_PREDICTION,
     TOPIC_TRAFFIC_LIGHT,
 )
-from rocas.msgs import (
-    chassis_pb2,
-    control_pb2,
-    localization_pb2,
-    perception_pb2,
-    planning_pb2,
-    prediction_pb2,
-)
-from rocas.sim.protocol import MessageSink
-from rocas.sim.world import COLOR_NAMES, BatchWorld
 
 _NS = 1_000_000_000
 

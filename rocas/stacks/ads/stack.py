@@ -17,16 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rocas.errors import UsageError
+from rocas.sim.actors import ActorState
+from rocas.sim.dynamics import VehicleState
+from rocas.sim.world import BatchWorld, light_state
 from rocas.stacks.ads.control import Control, ControlOutput
 from rocas.stacks.ads.localization import Canbus, ChassisOutput, Localization, LocalizationOutput
 from rocas.stacks.ads.oracle import SUBSTITUTABLE, PerfectPerception, PerfectPrediction
 from rocas.stacks.ads.perception import Perception, PerceptionOutput, ground_truth
 from rocas.stacks.ads.planning import Planning, PlanningOutput
 from rocas.stacks.ads.prediction import Prediction, PredictionOutput
-from rocas.errors import UsageError
-from rocas.sim.actors import ActorState
-from rocas.sim.dynamics import VehicleState
-from rocas.sim.world import BatchWorld, light_state
 
 PERCEPTION_PERIOD_S = 0.1
 

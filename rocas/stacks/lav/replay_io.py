@@ -8,7 +8,7 @@ import math
 from typing import Any
 
 from rocas.stacks.base import AgentRow, PoseRow
-from rocas.stacks.lav.stack import TOPIC_AGENTS, TOPIC_EGO
+from rocas.stacks.lav.topics import TOPIC_AGENTS, TOPIC_EGO
 
 _NS = 1e-9
 

@@ -32,9 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if (args.batch is None) == (args.scenario is None or args.config is None):
         ap.error("give --scenario and --config, or --batch")
+    from rocas.rollout import rollout
     from rocas.scenarios.loader import scenario_from_dict
     from rocas.stacks.registry import get_stack
-    from rocas.stacks.rollout import rollout
 
     try:
         if args.batch is not None:
@@ -49,17 +49,17 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError, KeyError, RocasError) as exc:
         print(f"lav-sim: error: {exc}", file=sys.stderr)
         return 2
-    print(res.outcomes[0].summary())
+    print(res.outcome.summary())
     return 0
 
 
 def _batch(batch: str, out: str) -> int:
     import numpy as np
 
+    from rocas.rollout import rollout_batch
     from rocas.scenarios.loader import scenario_from_dict
     from rocas.sim.recorder import outcome_metadata
     from rocas.stacks.registry import get_stack
-    from rocas.stacks.rollout import rollout_batch
 
     with open(batch, encoding="utf-8") as f:
         runs = json.load(f)["runs"]

@@ -22,13 +22,16 @@ from rocas.stacks.lav.msgs import lav_pb2
 from rocas.stacks.lav.params import MODULES, parameters
 from rocas.stacks.lav.planner import EgoPlan, Planner
 from rocas.stacks.lav.pnp import KIND_NAMES, Agents, PerceptionPrediction
+from rocas.stacks.lav.replay_io import read_motion
+from rocas.stacks.lav.topics import (
+    TOPIC_AGENTS,
+    TOPIC_BRAKE,
+    TOPIC_COMMAND,
+    TOPIC_EGO,
+    TOPIC_PLAN,
+)
 
 PERIOD_S = 0.1
-TOPIC_EGO = "/lav/gnss/ego"
-TOPIC_AGENTS = "/lav/pnp/agents"
-TOPIC_PLAN = "/lav/planner/waypoints"
-TOPIC_BRAKE = "/lav/brake/prediction"
-TOPIC_COMMAND = "/lav/control/command"
 
 CHANNELS = (
     ChannelSpec(TOPIC_EGO, lav_pb2.EgoState, "gnss", ("pnp", "planner", "controller"), 0.05),
@@ -45,6 +48,7 @@ class LavStack:
     name = "lav"
     modules: tuple[str, ...] = MODULES
     channels: tuple[ChannelSpec, ...] = CHANNELS
+    catalog = "lav"
 
     #: a cyber search may not lower these (a "fix" that brakes or senses less hides the accident)
     braking_limits: tuple[str, ...] = ("controller.max_brake_decel_mps2",)
@@ -60,8 +64,6 @@ class LavStack:
 
     def read_motion(self, recording: Any) -> tuple[list[Any], list[Any]]:
         """Replay's input from a recording of this stack (:mod:`rocas.stacks.lav.replay_io`)."""
-        from rocas.stacks.lav.replay_io import read_motion
-
         return read_motion(recording)
 
     def build(self, world: BatchWorld, params: Mapping[str, np.ndarray]) -> LavRun:

@@ -3,8 +3,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rocas.stacks.ads import classifier
 from rocas.scenarios.model import COLORS
+from rocas.stacks.ads import classifier
 
 SCRIPT = Path(__file__).resolve().parents[3] / "scripts" / "train_brake_classifier.py"
 

@@ -3,23 +3,25 @@
 import numpy as np
 import pytest
 
-from rocas.stacks.ads import classifier
-from rocas.stacks.ads.oracle import SUBSTITUTABLE
-from rocas.stacks.ads.params import stack_params
-from rocas.stacks.ads.perception import sim_light_to_tl
-from rocas.stacks.ads.prediction import perceived_world_state
-from rocas.stacks.ads.run import AdsRun, resolve_params, simulate_batch
-from rocas.stacks.ads.stack import oracle_masks
+from rocas.catalog import entry
 from rocas.errors import UsageError
-from rocas.scenarios.catalog import entry
+from rocas.rollout import resolve, simulate_batch
 from rocas.sim.engine import rollout
 from rocas.sim.world import compile_batch, light_state
+from rocas.stacks.ads import classifier
+from rocas.stacks.ads.oracle import SUBSTITUTABLE
+from rocas.stacks.ads.perception import sim_light_to_tl
+from rocas.stacks.ads.prediction import perceived_world_state
+from rocas.stacks.ads.run import AdsRun
+from rocas.stacks.ads.stack import oracle_masks
+from rocas.stacks.base import batch_params
+from rocas.stacks.registry import get_stack
 
 
 def _outputs(scenario, oracle_modules):
     """One run with its stack outputs at every perception step: {tick: TickOutputs}."""
     world = compile_batch([scenario], [scenario.seed])
-    run = AdsRun(world, stack_params([resolve_params(scenario, None)]), oracle_modules)
+    run = AdsRun(world, batch_params([resolve(get_stack("ads"), scenario)]), oracle_modules)
     seen = {}
 
     def keep(tick):

@@ -7,9 +7,10 @@ changes the fingerprint of some module's published output over the run.
 
 import numpy as np
 
-from rocas.stacks.ads.params import PARAMETERS
-from rocas.stacks.ads.run import MODULE_ORDER, simulate_batch
+from rocas.rollout import simulate_batch
 from rocas.scenarios import load_example
+from rocas.stacks.ads.params import MODULES as MODULE_ORDER
+from rocas.stacks.ads.params import PARAMETERS
 
 CASES = (
     ("junction_straight", {}),

@@ -2,15 +2,20 @@ import pickle
 
 import pytest
 
-from rocas.stacks.ads.params import (
-    MODULES,
-    PARAMETERS,
-    ParamSet,
-    parameters,
-    parse_assignment,
-    stack_params,
-)
 from rocas.errors import ScenarioError
+from rocas.stacks.ads.params import MODULES, PARAMETERS, parameters
+from rocas.stacks.base import StackParams, batch_params
+from rocas.stacks.base import parse_assignment as parse_any
+
+SPECS = tuple(parameters())
+
+
+def ParamSet(overrides=None):  # noqa: N802 - the ADS's full assignment, as the rollout makes it
+    return StackParams(SPECS, overrides)
+
+
+def parse_assignment(text):
+    return parse_any(text, SPECS)
 
 
 def test_inventory_is_large_and_well_formed():
@@ -41,12 +46,12 @@ def test_paramset_is_an_immutable_hashable_mapping():
     assert pickle.loads(pickle.dumps(a)) == a and hash(a) == hash(ParamSet(a.overrides()))
     b = a.with_values({"control.speed_kp": 1.0})
     assert b.overrides() == {"planning.yield_distance_m": 3.0, "control.speed_kp": 1.0}
-    stacked = stack_params([a, b])
+    stacked = batch_params([a, b])
     assert stacked["control.speed_kp"].tolist() == [PARAMETERS["control.speed_kp"].default, 1.0]
 
 
 @pytest.mark.parametrize(("text", "match"), [
-    ("planning.nope=1", "unknown ADS parameter"),
+    ("planning.nope=1", "unknown parameter"),
     ("planning.yield_distance_m=abc", "not a number"),
     ("planning.yield_distance_m=99", "out of range"),
     ("perception.track_min_hits=2.5", "integer"),

@@ -1,4 +1,4 @@
-"""The names of the variant families (:mod:`rocas.scenarios.variants`), importable without
+"""The names of the variant families (:mod:`rocas.catalog.variants`), importable without
 numpy so that the command line can offer them as choices."""
 
 #: family name -> what a variant of it changes

@@ -2,7 +2,7 @@
 
 A *family* says what a variant changes (:data:`FAMILIES`):
 
-- ``jitter``: the entry's own small ranges (:func:`rocas.scenarios.catalog._jittered`).
+- ``jitter``: the entry's own small ranges (:func:`rocas.catalog._jittered`).
 - ``rotate``: the whole world turned by any angle about any point within
   :attr:`VariantRanges.extent_m` of the origin (a rotation about a point is also a translation).
 - ``mirror``: the whole world mirrored in any line (a left-hand-traffic world: lateral offsets
@@ -19,11 +19,11 @@ A *family* says what a variant changes (:data:`FAMILIES`):
 
 A drawn variant is kept only when it still crashes with the entry's documented consequence
 (and collision partner) and, for a fixable entry, a documented fix still repairs it
-(:func:`rocas.scenarios.catalog.fix_holds`): its ground truth is checked by re-simulation.
+(:func:`rocas.catalog.fix_holds`): its ground truth is checked by re-simulation.
 Variant ``k`` of family ``f`` with base seed ``s`` is drawn from
 ``numpy.random.default_rng([s, FAMILIES.index(f), k])``, so a set is the same on every run.
 
-A kept variant is a catalog entry of its own (:class:`~rocas.scenarios.catalog.CatalogEntry`:
+A kept variant is a catalog entry of its own (:class:`~rocas.catalog.CatalogEntry`:
 scenario, ground truth with the trigger's reference mutation moved along, e.g. mirrored
 waypoints or a scaled speed profile); :func:`variant_toml` writes it in the catalog format and
 :func:`load_variant` reads it back.
@@ -41,8 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from rocas.errors import ScenarioError, UsageError
-from rocas.scenarios.catalog import (
+from rocas.catalog import (
     CatalogEntry,
     GroundTruth,
     _jittered,
@@ -54,9 +53,10 @@ from rocas.scenarios.catalog import (
     toml_key,
     toml_value,
 )
-from rocas.scenarios.families import FAMILIES as FAMILY_HELP
+from rocas.catalog.families import FAMILIES as FAMILY_HELP
+from rocas.errors import ScenarioError, UsageError
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
-from rocas.scenarios.model import COLORS, VEHICLE_MODELS, Scenario
+from rocas.scenarios.model import COLORS, DEFAULT_STACK, VEHICLE_MODELS, Scenario
 from rocas.scenarios.transform import (
     PlaneTransform,
     transform_change,
@@ -133,10 +133,15 @@ class VariantReport:
 
 # --- drawing one variant ----------------------------------------------------------------------
 
-def _default_cruise_mps() -> float:
-    from rocas.stacks.ads.params import PARAMETERS
+def _default_cruise_mps(doc: Mapping[str, Any]) -> float:
+    """The cruise speed the entry's stack plans with by default [m/s] (no cap when it has
+    no such parameter): lanes faster than it are not driven faster."""
+    from rocas.stacks.registry import get_stack
 
-    return PARAMETERS["planning.cruise_speed_mps"].default
+    stack = get_stack(doc.get("ego", {}).get("stack", DEFAULT_STACK))
+    specs = {p.full_name: p for p in stack.parameters}
+    cruise = specs.get("planning.cruise_speed_mps")
+    return cruise.default if cruise is not None else math.inf
 
 
 def _scale_profile(profile: list[list[float]], f: float) -> list[list[float]]:
@@ -148,7 +153,7 @@ def _speeds(doc: dict[str, Any], ref: dict[str, Any], rng: np.random.Generator,
     lo, hi = r.ego_speed
     mid = 1.0
     f_ego = float(mid + rng.uniform(lo - mid, hi - mid) * reach)
-    cruise = _default_cruise_mps()
+    cruise = _default_cruise_mps(doc)
     for lane in doc["lanes"]:
         lane["speed_limit_mps"] = max(min(lane["speed_limit_mps"], cruise) * f_ego, 1.0)
     doc["ego"]["start_speed_mps"] = doc["ego"]["start_speed_mps"] * f_ego
@@ -265,7 +270,7 @@ def _batch_key(s: Scenario) -> tuple[object, ...]:
 def _simulate_groups(runs: Sequence[tuple[Scenario, Mapping[str, float] | None]]) -> list[Any]:
     """Simulate (scenario, params) runs, batching those of one structure; returns per run
     (outcome, ego trace (T + 1, 5), times (T + 1,))."""
-    from rocas.stacks.ads.run import simulate_batch
+    from rocas.rollout import simulate_batch
 
     groups: dict[tuple[object, ...], list[int]] = {}
     for i, (s, _) in enumerate(runs):
@@ -394,7 +399,7 @@ def load_variant(path: str | Path) -> CatalogEntry:
 
 def source_entry(variant: CatalogEntry) -> CatalogEntry:
     """The catalog entry a variant was made from (by its ground truth's type id)."""
-    from rocas.scenarios.catalog import entry
+    from rocas.catalog import entry
 
     return entry(variant.truth.id)
 

@@ -1,20 +1,21 @@
 """The accident catalog: twelve scenarios modelled on the paper's accident types A1-A12.
 
-Each entry is a scenario TOML file in this package (``a01_*.toml`` ... ``a12_*.toml``) in the
+Each stack's catalog is the folder of this package its stack declares (``Stack.catalog``; the
+built-in ADS's ``ads/a01_*.toml`` ... ``ads/a12_*.toml``), each entry a scenario TOML file in the
 ordinary scenario format plus one extra table, ``[ground_truth]``, that states the known answer:
 the triggering entity and property (and a mutation of it that avoids the accident), the
 responsible module, the parameter(s) and values that avoid it (or that no configuration fix
 exists), and what ``rocas diff`` finds between the accident and the physically mutated run.
 
 ```python
-from rocas.scenarios.catalog import entries, entry
+from rocas.catalog import entries, entry
 e = entry("A9")
 e.scenario            # the Scenario (defaults of the ADS: the accident)
 e.truth.fix           # {"perception.brake_threshold": 0.99}
 e.reference_scenario  # the triggering property mutated: no accident
 ```
 
-Another registered stack has its own catalog in the subpackage of its name (``lav/l01_*.toml``
+Another registered stack has its own catalog in the folder it declares (``lav/l01_*.toml``
 ... for the LAV-like stack): ``entries(stack="lav")``, ``entry("L1", stack="lav")``. Its ground
 truth names that stack's modules and parameters, and its scenarios name the stack (``[ego]
 stack``).
@@ -35,20 +36,22 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from rocas.errors import ScenarioError, UsageError
+from rocas.rollout import check_params
 from rocas.scenarios.loader import scenario_from_dict, scenario_to_dict
-from rocas.scenarios.model import Scenario
+from rocas.scenarios.model import DEFAULT_STACK, Scenario
+from rocas.stacks.registry import get_stack
 
 CONSEQUENCES = ("collision", "emergency")
 #: a documented fix may move the ego by at most this much (RMSE [m]) before the accident...
 PRE_ACCIDENT_RMSE_M = 0.5
 #: ...over [0, t_accident - this] [s]
 PRE_ACCIDENT_MARGIN_S = 3.0
-MODULES = ("perception", "prediction", "planning")
 _ENTITY_KEYS = {"actor": "actors", "object": "objects", "area": "areas",
                 "traffic_light": "traffic_lights"}
 _TRUTH_KEYS = {"id", "title", "paper", "consequence", "collision_with", "situation", "module",
@@ -143,18 +146,12 @@ def _fail(source: str, key: str, reason: str) -> ScenarioError:
 
 
 def _inventory(stack: str) -> tuple[tuple[str, ...], set[str]]:
-    """The modules a ground truth may name and the parameters it may set, per stack."""
-    if stack == "ads":
-        from rocas.stacks.ads.params import PARAMETERS
-
-        return MODULES, set(PARAMETERS)
-    from rocas.stacks.registry import get_stack
-
+    """The modules a ground truth may name and the parameters it may set: the stack's."""
     st = get_stack(stack)
     return tuple(st.modules), {p.full_name for p in st.parameters}
 
 
-def _truth(data: Mapping[str, Any], source: str, stack: str = "ads") -> GroundTruth:
+def _truth(data: Mapping[str, Any], source: str, stack: str = DEFAULT_STACK) -> GroundTruth:
     unknown = set(data) - _TRUTH_KEYS
     if unknown:
         raise _fail(source, sorted(unknown)[0], "unknown key")
@@ -167,7 +164,7 @@ def _truth(data: Mapping[str, Any], source: str, stack: str = "ads") -> GroundTr
     modules, names = _inventory(stack)
     if data["module"] not in modules:
         raise _fail(source, "module", f"expected one of {modules}")
-    what = "ADS parameter" if stack == "ads" else f"parameter of stack {stack!r}"
+    what = f"parameter of stack {stack!r}"
     for name in list(data["parameters"]) + list(data.get("fix", {})):
         if name not in names:
             raise _fail(source, "parameters", f"unknown {what} {name!r}")
@@ -235,9 +232,17 @@ def mutate(document: Mapping[str, Any], change: Mapping[str, Any], source: str,
     return scenario_from_dict(doc, source=source)
 
 
-def _root(stack: str = "ads"):  # noqa: ANN202
-    root = resources.files("rocas.scenarios") / "catalog"
-    return root if stack == "ads" else root / stack
+def _root(stack: str = DEFAULT_STACK):  # noqa: ANN202
+    """The folder of this package holding ``stack``'s catalog (what the stack declares)."""
+    return resources.files("rocas.catalog") / _folder(stack)
+
+
+def _folder(stack: str) -> str:
+    folder = getattr(get_stack(stack), "catalog", None)
+    if not folder:
+        raise UsageError(f"stack {stack!r} has no accident catalog",
+                         "catalogs exist for: " + ", ".join(stacks_with_catalog()))
+    return str(folder)
 
 
 def _is_entry_file(name: str) -> bool:
@@ -247,12 +252,12 @@ def _is_entry_file(name: str) -> bool:
 
 
 @cache
-def _load_all(stack: str = "ads") -> tuple[CatalogEntry, ...]:
+def _load_all(stack: str = DEFAULT_STACK) -> tuple[CatalogEntry, ...]:
     root = _root(stack)
     if not root.is_dir():
         raise UsageError(f"stack {stack!r} has no accident catalog",
                          "catalogs exist for: " + ", ".join(stacks_with_catalog()))
-    prefix = "catalog/" if stack == "ads" else f"catalog/{stack}/"
+    prefix = f"catalog/{_folder(stack)}/"
     out = []
     for f in sorted(root.iterdir(), key=lambda p: p.name):
         if not _is_entry_file(f.name):
@@ -266,31 +271,39 @@ def _load_all(stack: str = "ads") -> tuple[CatalogEntry, ...]:
     return tuple(out)
 
 
+def shipped_recordings(stack: str = DEFAULT_STACK) -> Path:
+    """Where the repository keeps the recordings of ``stack``'s catalog (``recordings/`` and
+    the subfolder the stack declares as ``recordings``)."""
+    return Path("recordings") / str(getattr(get_stack(stack), "recordings", stack))
+
+
 def stacks_with_catalog() -> tuple[str, ...]:
-    """The stacks that have an accident catalog (``ads`` first)."""
-    return ("ads", *sorted(d.name for d in _root().iterdir()
-                           if d.is_dir() and not d.name.startswith("_")))
+    """The registered stacks that declare an accident catalog (the default stack first)."""
+    from rocas.stacks.registry import names
+
+    have = [n for n in names() if getattr(get_stack(n), "catalog", None)]
+    return tuple(sorted(have, key=lambda n: (n != DEFAULT_STACK, n)))
 
 
 def entry_from_document(data: Mapping[str, Any], key: str, source: str,
-                        stack: str = "ads") -> CatalogEntry:
+                        stack: str = DEFAULT_STACK) -> CatalogEntry:
     """A catalog entry from a parsed catalog-format document (a scenario plus its
     ``[ground_truth]`` table): the shipped entries and generated variants' files alike."""
     data = dict(data)
     truth_doc = data.pop("ground_truth", None)
     if not isinstance(truth_doc, Mapping):
         raise ScenarioError(f"{source}: no [ground_truth] table")
-    scenario = scenario_from_dict(data, source=source)
+    scenario = check_params(scenario_from_dict(data, source=source), source)
     return CatalogEntry(key=key, scenario=scenario, truth=_truth(truth_doc, source, stack),
                         document=data)
 
 
-def entries(stack: str = "ads") -> tuple[CatalogEntry, ...]:
+def entries(stack: str = DEFAULT_STACK) -> tuple[CatalogEntry, ...]:
     """All catalog entries of ``stack``'s catalog, in type order (A1 or L1 first)."""
     return tuple(sorted(_load_all(stack), key=lambda e: int(e.id[1:])))
 
 
-def entry(type_id: str, stack: str = "ads") -> CatalogEntry:
+def entry(type_id: str, stack: str = DEFAULT_STACK) -> CatalogEntry:
     """One entry by type id ("A9", "a9", "a09") or file stem."""
     want = type_id.lower()
     for e in entries(stack):
@@ -298,8 +311,7 @@ def entry(type_id: str, stack: str = "ads") -> CatalogEntry:
                 want[:1] == e.id[:1].lower() and want[1:].isdigit()
                 and int(want[1:]) == int(e.id[1:])):
             return e
-    raise UsageError(f"no catalog entry {type_id!r}" + ("" if stack == "ads" else
-                                                        f" for stack {stack!r}"),
+    raise UsageError(f"no catalog entry {type_id!r} for stack {stack!r}",
                      f"available: {', '.join(e.id for e in entries(stack))}")
 
 
@@ -394,7 +406,7 @@ def generate_instances(e: CatalogEntry, count: int, *, seed: int = 0,
     kept when it passes. Stops at ``count`` kept or ``max_tries`` (default ``8 * count``)
     tried.
     """
-    from rocas.stacks.rollout import simulate_batch
+    from rocas.rollout import simulate_batch
 
     if count < 1:
         raise UsageError("the number of instances must be >= 1")

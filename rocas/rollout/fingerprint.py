@@ -20,7 +20,7 @@ def run_fingerprint(scenario: Scenario, *, with_messages: bool = True) -> str:
     ``with_messages``, the payload of every message the run publishes, in log order."""
     from mcap.reader import make_reader
 
-    from rocas.stacks.ads.run import simulate, simulate_batch
+    from rocas.rollout import simulate, simulate_batch
 
     h = hashlib.sha256()
     res = simulate_batch(scenario, track_outputs=True)
