@@ -99,7 +99,8 @@ class Planner:
         collide = any_k.any(axis=1)
         first_k = np.where(collide, any_k.argmax(axis=1), 0)
         when = np.where(collide, ft[np.arange(n), first_k], 0.0)
-        first_m = hit[np.arange(n), :, first_k].argmax(axis=1)
+        first_m = (hit[np.arange(n), :, first_k].argmax(axis=1) if hit.shape[1]
+                   else np.zeros(n, dtype=np.intp))  # no agent at all (an empty road)
         # the hold: a fresh collision restarts it, a held one keeps its time and agent
         held = ~collide & (self.held > 0)
         self.held = np.where(collide, self.hold_steps, np.maximum(self.held - 1, 0))
