@@ -146,6 +146,26 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
     if not pose_rows:
         raise RecordingError(f"{path}: no decodable message on {TOPIC_POSE}",
                              "the ego's pose series is what replay transforms obstacles with")
+    world, damage = _world(path, rec)
+    meta = dict(rec.metadata)
+    pose = np.asarray(pose_rows, dtype=np.float64)
+    order = np.argsort(pose[:, 0], kind="stable")
+    pose, lanes = pose[order], [lanes[i] for i in order]
+    ego_times = pose[:, 0]
+    detections = (_agent_detections(frames) if foreign
+                  else _detections(frames, ego_times, pose[:, 1:4]))
+    ftimes = np.unique([f[0] for f in frames]) if foreign else np.array([f[0] for f in frames])
+    period = float(np.median(np.diff(ftimes))) if len(ftimes) > 1 else 0.1
+    return RecordedRun(path=path, world=world, ego_meta=meta.get(EGO_METADATA),
+                       run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
+                       ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
+                       perception_period_s=period if period > 0 else 0.1, warnings=damage,
+                       stack=stack)
+
+
+def _world(path: str, rec: Any) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """The static world of the ``rocas/world.json`` attachment (checked to hold a map) and
+    the damage both passes over the file found."""
     world_bytes = rec.attachment(WORLD_ATTACHMENT)
     damage = tuple(rec.warnings(path))  # the message pass's and the attachment pass's
     if world_bytes is None:
@@ -166,20 +186,7 @@ def read_recording(path: str | os.PathLike[str]) -> RecordedRun:
             "list of lanes with 'id' and 'points')",
             "replay needs the world in rocas's scenario format (docs/scenarios.md), as "
             "'rocas simulate' writes it")
-    meta = dict(rec.metadata)
-    pose = np.asarray(pose_rows, dtype=np.float64)
-    order = np.argsort(pose[:, 0], kind="stable")
-    pose, lanes = pose[order], [lanes[i] for i in order]
-    ego_times = pose[:, 0]
-    detections = (_agent_detections(frames) if foreign
-                  else _detections(frames, ego_times, pose[:, 1:4]))
-    ftimes = np.unique([f[0] for f in frames]) if foreign else np.array([f[0] for f in frames])
-    period = float(np.median(np.diff(ftimes))) if len(ftimes) > 1 else 0.1
-    return RecordedRun(path=path, world=world, ego_meta=meta.get(EGO_METADATA),
-                       run_meta=meta.get(RUN_METADATA), ego_times=ego_times,
-                       ego_track=pose[:, 1:6], ego_lanes=tuple(lanes), detections=detections,
-                       perception_period_s=period if period > 0 else 0.1, warnings=damage,
-                       stack=stack)
+    return world, damage
 
 
 _KIND_TYPES = {"vehicle": TYPE_VEHICLE, "bicycle": TYPE_BICYCLE, "pedestrian": TYPE_PEDESTRIAN}

@@ -303,26 +303,30 @@ def _actor_path(s: Scenario, i: int) -> np.ndarray:
     return _extend(_offset(base, a.lateral_offset_m), 40.0)
 
 
-def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchWorld:
-    """Stack N scenario variants (same structure) into a :class:`BatchWorld`."""
+def _check_structure(scenarios: Sequence[Scenario]) -> None:
+    """Refuse a batch whose variants differ in more than their properties."""
     if not scenarios:
         raise ScenarioError("a batch needs at least one scenario")
-    first = scenarios[0]
-    key = _structure(first)
+    key = _structure(scenarios[0])
     for k, s in enumerate(scenarios[1:], 1):
         if _structure(s) != key:
             raise ScenarioError(
                 f"variant {k} ({s.name}): differs from variant 0 in its structure",
                 "a batch varies properties (models, colours, poses, speeds, weather, policies, "
                 "parameters) of one map, ego route and set of entities")
-    road = road_geometry(first.lanes, first.ego.route, first.ego.start_s_m,
-                         first.ego.destination_s_m)
-    n, na, ne = len(scenarios), len(first.actors), len(first.objects)
-    nl = len(first.traffic_lights)
-    kind_code = {"vehicle": KIND_VEHICLE, "cyclist": KIND_CYCLIST, "pedestrian": KIND_PEDESTRIAN}
-    # variants of a batch mostly share their actors' paths: each distinct path (a function of
-    # the route, waypoints and offset on the batch's one map), its resampling and a
-    # variant's headings are computed once and copied (the same values)
+
+
+def _actor_paths(scenarios: Sequence[Scenario]) -> dict[str, np.ndarray]:
+    """The actors' resampled paths (N, A, P, 2), their headings (N, A, P), spacing (N, A) [m]
+    and point counts (N, A).
+
+    Variants of a batch mostly share their actors' paths: each distinct path (a function of
+    the route, waypoints and offset on the batch's one map), its resampling and a variant's
+    headings are computed once and copied (the same values). Each variant samples its paths
+    with its own count (as alone in a batch): a batch-wide count made a variant's result
+    depend on the other variants' path lengths.
+    """
+    n, na = len(scenarios), len(scenarios[0].actors)
     path_keys = [[(a.route, a.waypoints, a.lateral_offset_m) for a in s.actors]
                  for s in scenarios]
     known: dict[tuple[object, ...], np.ndarray] = {}
@@ -332,8 +336,6 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
             if key not in known:
                 known[key] = _actor_path(s, i)
                 lengths[key] = _length(known[key])
-    # each variant samples its paths with its own count (as alone in a batch); a batch-wide
-    # count made a variant's result depend on the other variants' path lengths
     counts = [max([int(math.ceil(lengths[k] / ACTOR_PATH_SPACING_M)) + 1 for k in row] + [2])
               for row in path_keys]
     npts = max(counts)
@@ -355,7 +357,16 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
                 headings[hkey] = polyline_headings(actor_path[v, :, :c])
             actor_heading[v, :, :c] = headings[hkey]
             actor_heading[v, :, c:] = actor_heading[v, :, c - 1:c]
-    actor_count = np.broadcast_to(np.asarray(counts, dtype=np.int64)[:, None], (n, na))
+    return {"actor_path": actor_path, "actor_path_ds": actor_ds,
+            "actor_path_heading": actor_heading,
+            "actor_path_count": np.broadcast_to(np.asarray(counts, dtype=np.int64)[:, None],
+                                                (n, na))}
+
+
+def _speed_profiles(scenarios: Sequence[Scenario]) -> dict[str, np.ndarray]:
+    """The actors' speed-profile knots, padded to one count: times (N, A, K) [s] (padding
+    far in the future) and speeds (N, A, K) [m/s]."""
+    n, na = len(scenarios), len(scenarios[0].actors)
     kmax = max([len(a.speed_profile) for s in scenarios for a in s.actors] + [1])
     prof_t = np.zeros((n, na, kmax))
     prof_v = np.zeros((n, na, kmax))
@@ -366,70 +377,97 @@ def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchW
             for k, (t, sp) in enumerate(knots):
                 prof_t[v, i, k] = t if k < len(a.speed_profile) else last_t + 1e3 * (k + 1)
                 prof_v[v, i, k] = sp
+    return {"actor_profile_t": prof_t, "actor_profile_v": prof_v}
+
+
+def _area_fields(first: Scenario) -> dict[str, np.ndarray]:
+    """The areas' polygon edges (E, 4) [x0, y0, x1, y1], each edge's area, kinds, heights."""
     edges, owner = [], []
     for g, area in enumerate(first.areas):
         poly = _polyline(area.polygon)
         for j in range(len(poly)):
             edges.append([*poly[j], *poly[(j + 1) % len(poly)]])
             owner.append(g)
+    return {"area_edges": np.array(edges, dtype=np.float64).reshape(-1, 4),
+            "area_edge_owner": np.array(owner, dtype=np.int64),
+            "area_kind": np.array([0 if a.kind == "building" else 1 for a in first.areas],
+                                  np.int64),
+            "area_height": np.array([a.height_m for a in first.areas], dtype=np.float64)}
+
+
+def _light_geometry(first: Scenario) -> dict[str, np.ndarray]:
+    """The lights' positions and facings, stop points (L, 2) [m] and their arc length along
+    the ego's route [m]."""
     lanes_by_id = {ln.id: ln for ln in first.lanes}
-    stop_xy = []
-    for tl in first.traffic_lights:
-        x, y, _ = point_at(lanes_by_id[tl.stop_lane].centerline, tl.stop_s_m)
-        stop_xy.append([x, y])
+    stop_xy = [list(point_at(lanes_by_id[tl.stop_lane].centerline, tl.stop_s_m)[:2])
+               for tl in first.traffic_lights]
+    lights = first.traffic_lights
+    return {"light_pos": np.array([t.position for t in lights], np.float64).reshape(-1, 2),
+            "light_facing": np.array([t.facing_rad for t in lights], np.float64),
+            "light_stop_xy": np.array(stop_xy, np.float64).reshape(-1, 2),
+            "light_stop_route_s": np.array([route_s_of_lane(first.ego.route, first.lanes,
+                                                            t.stop_lane, t.stop_s_m)
+                                            for t in lights])}
 
-    def arr(f, shape=None, dtype=np.float64):  # noqa: ANN001, ANN202
-        out = np.array([f(s) for s in scenarios], dtype=dtype)
-        return out.reshape((n, *shape)) if shape is not None else out
 
+def _per_variant(scenarios: Sequence[Scenario]) -> dict[str, np.ndarray]:
+    """The properties a batch's variants may differ in, one row per variant."""
+    first = scenarios[0]
+    n, na, ne = len(scenarios), len(first.actors), len(first.objects)
+    nl = len(first.traffic_lights)
+    kind_code = {"vehicle": KIND_VEHICLE, "cyclist": KIND_CYCLIST, "pedestrian": KIND_PEDESTRIAN}
+
+    def arr(f, shape, dtype=np.float64):  # noqa: ANN001, ANN202
+        return np.array([f(s) for s in scenarios], dtype=dtype).reshape((n, *shape))
+
+    return {
+        "actor_kind": arr(lambda s: [kind_code[a.kind] for a in s.actors], (na,), np.int64),
+        "actor_model": arr(lambda s: [MODEL_CODES[a.model] if a.kind == "vehicle" else -1
+                                      for a in s.actors], (na,), np.int64),
+        "actor_dims": arr(lambda s: [a.dimensions for a in s.actors], (na, 3)),
+        "actor_rgb": arr(lambda s: [COLORS[a.color] for a in s.actors], (na, 3)),
+        "actor_color": arr(lambda s: [COLOR_NAMES.index(a.color) for a in s.actors], (na,),
+                           np.int64),
+        "actor_start_s": arr(lambda s: [a.start_s_m for a in s.actors], (na,)),
+        "actor_reactive": arr(lambda s: [a.reactive for a in s.actors], (na,), bool),
+        "actor_reactive_gap": arr(lambda s: [a.reactive_gap_m for a in s.actors], (na,)),
+        "object_kind": arr(lambda s: [KIND_CONE + OBJECT_KINDS.index(o.kind) for o in s.objects],
+                           (ne,), np.int64),
+        "object_pos": arr(lambda s: [o.position for o in s.objects], (ne, 2)),
+        "object_yaw": arr(lambda s: [o.yaw_rad for o in s.objects], (ne,)),
+        "object_dims": arr(lambda s: [o.dimensions for o in s.objects], (ne, 3)),
+        "area_enabled": arr(lambda s: [a.enabled for a in s.areas], (len(first.areas),), bool),
+        "light_mode": arr(lambda s: [t.policy.mode == "cycle" for t in s.traffic_lights], (nl,),
+                          np.int64),
+        "light_color": arr(lambda s: [LIGHT_CODES[t.policy.color] for t in s.traffic_lights],
+                           (nl,), np.int64),
+        "light_green": arr(lambda s: [t.policy.green_s for t in s.traffic_lights], (nl,)),
+        "light_yellow": arr(lambda s: [t.policy.yellow_s for t in s.traffic_lights], (nl,)),
+        "light_red": arr(lambda s: [t.policy.red_s for t in s.traffic_lights], (nl,)),
+        "light_offset": arr(lambda s: [t.policy.offset_s for t in s.traffic_lights], (nl,)),
+        "light_enabled": arr(lambda s: [t.enabled for t in s.traffic_lights], (nl,), bool),
+        "weather": arr(lambda s: [s.weather.cloudiness, s.weather.precipitation,
+                                  s.weather.fog_density, s.weather.sun_azimuth_deg,
+                                  s.weather.sun_altitude_deg], (5,)),
+    }
+
+
+def compile_batch(scenarios: Sequence[Scenario], seeds: Sequence[int]) -> BatchWorld:
+    """Stack N scenario variants (same structure) into a :class:`BatchWorld`."""
+    _check_structure(scenarios)
+    first = scenarios[0]
+    road = road_geometry(first.lanes, first.ego.route, first.ego.start_s_m,
+                         first.ego.destination_s_m)
     return BatchWorld(
         road=road, dt_s=first.dt_s, num_ticks=first.num_ticks,
         seeds=np.array([int(x) & 0xFFFFFFFFFFFF for x in seeds], dtype=np.uint64),
         actor_ids=tuple(a.id for a in first.actors),
-        actor_kind=arr(lambda s: [kind_code[a.kind] for a in s.actors], (na,), np.int64),
-        actor_model=arr(lambda s: [MODEL_CODES[a.model] if a.kind == "vehicle" else -1
-                                   for a in s.actors], (na,), np.int64),
-        actor_dims=arr(lambda s: [a.dimensions for a in s.actors], (na, 3)),
-        actor_rgb=arr(lambda s: [COLORS[a.color] for a in s.actors], (na, 3)),
-        actor_color=arr(lambda s: [COLOR_NAMES.index(a.color) for a in s.actors], (na,),
-                        np.int64),
-        actor_path=actor_path, actor_path_ds=actor_ds, actor_path_heading=actor_heading,
-        actor_path_count=actor_count,
-        actor_start_s=arr(lambda s: [a.start_s_m for a in s.actors], (na,)),
-        actor_profile_t=prof_t, actor_profile_v=prof_v,
-        actor_reactive=arr(lambda s: [a.reactive for a in s.actors], (na,), bool),
-        actor_reactive_gap=arr(lambda s: [a.reactive_gap_m for a in s.actors], (na,)),
         object_ids=tuple(o.id for o in first.objects),
-        object_kind=arr(lambda s: [KIND_CONE + OBJECT_KINDS.index(o.kind) for o in s.objects],
-                        (ne,), np.int64),
-        object_pos=arr(lambda s: [o.position for o in s.objects], (ne, 2)),
-        object_yaw=arr(lambda s: [o.yaw_rad for o in s.objects], (ne,)),
-        object_dims=arr(lambda s: [o.dimensions for o in s.objects], (ne, 3)),
         area_ids=tuple(a.id for a in first.areas),
-        area_edges=np.array(edges, dtype=np.float64).reshape(-1, 4),
-        area_edge_owner=np.array(owner, dtype=np.int64),
-        area_kind=np.array([0 if a.kind == "building" else 1 for a in first.areas], np.int64),
-        area_enabled=arr(lambda s: [a.enabled for a in s.areas], (len(first.areas),), bool),
-        area_height=np.array([a.height_m for a in first.areas], dtype=np.float64),
         light_ids=tuple(t.id for t in first.traffic_lights),
-        light_pos=np.array([t.position for t in first.traffic_lights], np.float64).reshape(-1, 2),
-        light_facing=np.array([t.facing_rad for t in first.traffic_lights], np.float64),
-        light_stop_xy=np.array(stop_xy, np.float64).reshape(-1, 2),
-        light_stop_route_s=np.array([route_s_of_lane(first.ego.route, first.lanes, t.stop_lane,
-                                                     t.stop_s_m) for t in first.traffic_lights]),
-        light_mode=arr(lambda s: [t.policy.mode == "cycle" for t in s.traffic_lights], (nl,),
-                       np.int64),
-        light_color=arr(lambda s: [LIGHT_CODES[t.policy.color] for t in s.traffic_lights],
-                        (nl,), np.int64),
-        light_green=arr(lambda s: [t.policy.green_s for t in s.traffic_lights], (nl,)),
-        light_yellow=arr(lambda s: [t.policy.yellow_s for t in s.traffic_lights], (nl,)),
-        light_red=arr(lambda s: [t.policy.red_s for t in s.traffic_lights], (nl,)),
-        light_offset=arr(lambda s: [t.policy.offset_s for t in s.traffic_lights], (nl,)),
-        light_enabled=arr(lambda s: [t.enabled for t in s.traffic_lights], (nl,), bool),
-        weather=arr(lambda s: [s.weather.cloudiness, s.weather.precipitation,
-                               s.weather.fog_density, s.weather.sun_azimuth_deg,
-                               s.weather.sun_altitude_deg], (5,)),
         ego_dims=np.array([EGO_LENGTH_M, EGO_WIDTH_M, 1.6]),
+        **_actor_paths(scenarios), **_speed_profiles(scenarios), **_area_fields(first),
+        **_light_geometry(first), **_per_variant(scenarios),
     )
 
 
