@@ -30,7 +30,7 @@ def parse_set_options(assignments: list[str], command: str, stack: str = DEFAULT
     try:
         return dict(parse_assignment(a, specs) for a in assignments)
     except ScenarioError as exc:
-        hint = exc.hint or f"see 'rocas params --stack {stack}'"
+        hint = (exc.hint or "see 'rocas params --stack NAME'").replace("NAME", stack)
         raise UsageError(exc.message, f"{hint}; 'rocas {command} --help' for the options") from None
 
 

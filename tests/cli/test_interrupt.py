@@ -109,7 +109,7 @@ def test_catalog_record_keeps_the_finished_recordings(rocas, monkeypatch, tmp_pa
     from rocas.catalog import entries
 
     first, second = entries()[:2]
-    _interrupt_after(monkeypatch, "rocas.stacks.ads.run.simulate", 1)
+    _interrupt_after(monkeypatch, "rocas.rollout.simulate", 1)
     res = rocas("catalog", "record", tmp_path, "--only", first.id, "--only", second.id)
     assert res.code == 130
     line = _only_line(res.stderr)

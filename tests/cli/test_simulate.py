@@ -35,7 +35,8 @@ def test_bad_parameter_names_the_key(tmp_path):
     status, _, err = _run("simulate", "left_turn_oncoming", "-o", str(tmp_path / "x.mcap"),
                           "--set", "planning.nope=1")
     # an unknown --set parameter is a usage error (2), pointing to the command's help
-    assert status == 2 and "planning.nope" in err and "unknown ADS parameter" in err
+    assert status == 2 and "planning.nope" in err and "unknown parameter" in err
+    assert "rocas params --stack ads" in err
     assert "'rocas simulate --help'" in err
     assert not (tmp_path / "x.mcap").exists()
 
