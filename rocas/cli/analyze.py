@@ -167,7 +167,7 @@ def _use_stack_file(path: str, source: Any, out: Path) -> dict[str, str | None]:
     stack_file = Path(path).resolve()
     ext = ExternalStack.from_file(stack_file, out / "external")
     if isinstance(source, Path):
-        from rocas.recording.reader import open_recording
+        from rocas.recording.formats import open_recording
         from rocas.stacks.base import STACK_METADATA
 
         meta = dict(open_recording(str(source)).scan().metadata)

@@ -23,7 +23,8 @@ from rocas.ads.topics import (
 )
 from rocas.errors import RecordingError
 from rocas.msgs import localization_pb2, perception_pb2
-from rocas.recording.reader import ChannelInfo, open_recording
+from rocas.recording.formats import open_recording
+from rocas.recording.model import ChannelInfo
 from rocas.replay.frames import ego_to_world, ego_vector_to_world, interpolate_pose, wrap
 from rocas.stacks.base import STACK_METADATA
 

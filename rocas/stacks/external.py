@@ -287,7 +287,7 @@ def _from_file(path: str, cache: str) -> ExternalStack:
 
 def read_outcome(path: str | os.PathLike[str]) -> Outcome:
     """The ``rocas.run`` record of a recording as an :class:`Outcome`."""
-    from rocas.recording.reader import open_recording
+    from rocas.recording.formats import open_recording
 
     meta = dict(open_recording(str(path)).scan().metadata).get(RUN_METADATA)
     if meta is None:

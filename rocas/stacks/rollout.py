@@ -211,7 +211,7 @@ def _simulate_external(ext: Any, scenario: Scenario, params: Mapping[str, float]
     r = ext.simulate_batch([scenario], [params], [seed])
     recording, messages = None, 0
     if output is not None:
-        from rocas.recording.reader import open_recording
+        from rocas.recording.formats import open_recording
 
         one = ext.run(scenario, params, seed)
         part = f"{os.fspath(output)}.part"

@@ -442,7 +442,7 @@ MAX_CHANNELS_SHOWN = 500
 
 def load_execution(path: str | os.PathLike[str]) -> Execution:
     """Read a recording once and keep what the scene and the signals need."""
-    from rocas.recording.reader import open_recording
+    from rocas.recording.formats import open_recording
 
     rec = open_recording(path)
     ex = Execution(Path(path))

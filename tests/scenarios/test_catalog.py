@@ -11,7 +11,7 @@ import pytest
 
 from rocas.ads.params import PARAMETERS
 from rocas.ads.run import simulate_batch
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios.catalog import (
     PRE_ACCIDENT_MARGIN_S,
     PRE_ACCIDENT_RMSE_M,

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rocas.errors import ScenarioError, UsageError
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios.catalog import (
     accident_matches,
     entries,

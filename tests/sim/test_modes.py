@@ -8,7 +8,7 @@ import pytest
 
 from rocas.ads.run import simulate, simulate_batch
 from rocas.ads.topics import CHANNELS, EGO_METADATA, WORLD_ATTACHMENT
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios import load_example, scenario_from_dict
 
 

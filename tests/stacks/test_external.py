@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rocas.errors import UsageError
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios.catalog import entry
 from rocas.stacks.external import ExternalStack
 from rocas.stacks.registry import get_stack

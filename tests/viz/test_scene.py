@@ -8,7 +8,7 @@ from foreign_stack import make_pair
 from rrd import read_rrd
 
 from rocas.ads.run import simulate
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
 from rocas.viz.scene import actor_names, light_color_at, load_execution, log_scene
