@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from rocas.viz.scene import TIMELINE, ChannelSeries, Execution
+from rocas.viz.draw import TIMELINE
+from rocas.viz.execution import ChannelSeries, Execution
 
 #: Series colour per execution name.
 EXECUTION_COLORS = {"accident": (220, 50, 47), "reference": (40, 170, 80), "fixed": (40, 110, 230)}
@@ -82,7 +83,7 @@ def log_signals(
 
     Args:
         rec: an open ``rerun.RecordingStream``.
-        ex: the execution (see :func:`rocas.viz.scene.load_execution`).
+        ex: the execution (see :func:`rocas.viz.execution.load_execution`).
         prefix: entity subtree, e.g. ``executions/accident``.
         label: the execution's name in series names (default: last segment of ``prefix``).
         channels: also log every numeric field of every channel under ``channels/``.
