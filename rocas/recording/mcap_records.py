@@ -1,11 +1,11 @@
 """The bytes of an MCAP file, below the reader: record headers, chunks, the summary section.
 
 What :class:`rocas.recording.reader.Recording` needs to take a record apart without trusting
-its length fields: the header layout, the memory limits a length must respect, chunk
-inflation that never sizes a buffer from a field it has not checked, the parse of a chunk's
-inner records (messages as plain tuples, the hot path of every pass) and the summary section
-found and CRC-checked even when the data section before it changed length, and a
-complete pass compared with it. Every function
+its length fields: the header layout, the memory limits a length must respect, where a record
+can plausibly start (to resume reading after damage), chunk inflation that never sizes a buffer
+from a field it has not checked, the parse of a chunk's inner records (messages as plain
+tuples, the hot path of every pass), and the summary section, found and CRC-checked even when
+the data section before it changed length, then compared with a complete pass. Every function
 here is stateless; damage is raised as :class:`ValueError` (or :class:`BadRecord` with the
 offset) for the reader to count and skip.
 """
@@ -13,6 +13,7 @@ offset) for the reader to count and skip.
 from __future__ import annotations
 
 import io
+import re
 import struct
 import zlib
 from collections.abc import Mapping, Sequence
@@ -39,6 +40,11 @@ MAX_RECORD_BYTES = 512 << 20
 #: is still no more than the file's size. A larger ``uncompressed_size`` is skipped as damage
 #: (a corrupted size field or a decompression bomb).
 MAX_CHUNK_BYTES = 512 << 20
+#: Opcodes the MCAP specification defines (0x80 and above are user-defined and skipped).
+SPEC_OPCODES = frozenset(range(0x01, 0x10))
+# a plausible record header: a spec opcode and a length below 4 GiB. A look-ahead, so that
+# every offset is tried: a false candidate that overlaps a real header must not hide it.
+_CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 
 _FOOTER = struct.Struct("<BQQQI")  # opcode, length, summary start, summary offset start, crc
 _DATA_END_HEAD = RECORD_HEADER.pack(Opcode.DATA_END, 4)
@@ -244,6 +250,41 @@ def chunk_header_ok(head: bytes, length: int) -> bool:
     return records_length == length - (CHUNK_HEAD.size + clen + 8)
 
 
+def plausible(f: io.BufferedReader, pos: int, size: int, depth: int = 2) -> bool:
+    """Whether a record (and the ``depth`` records after it) could start at ``pos`` of the
+    file ``f`` of ``size`` bytes."""
+    for _ in range(depth + 1):
+        if pos == size or (pos == size - len(MAGIC) and peek(f, pos, 8) == MAGIC):
+            return True
+        head = peek(f, pos, 64)
+        if len(head) < RECORD_HEADER.size:
+            return False
+        opcode, length = RECORD_HEADER.unpack_from(head)
+        if opcode not in SPEC_OPCODES or length > size - pos - RECORD_HEADER.size:
+            return False
+        if opcode == Opcode.CHUNK:
+            return chunk_header_ok(head, length)
+        if opcode == Opcode.FOOTER and pos + RECORD_HEADER.size + length != size - 8:
+            return False
+        pos += RECORD_HEADER.size + length
+    return True
+
+
+def resync(f: io.BufferedReader, start: int, size: int) -> int | None:
+    """Offset of the next plausible record at or after ``start``, or None."""
+    block = 4 << 20
+    base = start
+    while base < size:
+        data = peek(f, base, block + 16)
+        for m in _CANDIDATE.finditer(data):
+            if m.start() >= block:
+                break
+            if plausible(f, base + m.start(), size):
+                return base + m.start()
+        base += block
+    return None
+
+
 def inflate(chunk: Chunk, limit: int) -> bytes:
     """The chunk's records, decompressed without trusting its size fields for allocation.
 
@@ -351,6 +392,8 @@ def chunk_records(data: bytes) -> list[Schema | Channel | MessageRecord]:
 
 
 class BadRecord(Exception):
+    """A record that cannot be read, at ``offset`` [bytes], and why."""
+
     def __init__(self, offset: int, reason: str) -> None:
         super().__init__(reason)
         self.offset = offset

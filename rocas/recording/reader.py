@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import io
 import os
-import re
 import struct
 import zlib
 from collections.abc import Callable, Iterator
@@ -39,6 +38,7 @@ from rocas.recording.integrity import CHECKSUM_KEY, checksum_problem
 from rocas.recording.mcap_records import (
     MAGIC,
     RECORD_HEADER,
+    SPEC_OPCODES,
     BadRecord,
     MessageRecord,
     SummarySection,
@@ -49,7 +49,9 @@ from rocas.recording.mcap_records import (
     inflate,
     message_record,
     peek,
+    plausible,
     read_summary,
+    resync,
     summary_mismatches,
 )
 from rocas.recording.model import (
@@ -61,11 +63,6 @@ from rocas.recording.model import (
     describe_error,
 )
 
-#: Opcodes the MCAP specification defines (0x80 and above are user-defined and skipped).
-_SPEC_OPCODES = frozenset(range(0x01, 0x10))
-# a plausible record header: a spec opcode and a length below 4 GiB. A look-ahead, so that
-# every offset is tried: a false candidate that overlaps a real header must not hide it.
-_CANDIDATE = re.compile(rb"(?=[\x01-\x0f].{4}\x00\x00\x00\x00)", re.DOTALL)
 #: Records a pass steps over without reading (indexes, statistics: the summary is checked apart).
 _SKIPPED_OPCODES = frozenset({
     Opcode.HEADER, Opcode.MESSAGE_INDEX, Opcode.CHUNK_INDEX, Opcode.ATTACHMENT_INDEX,
@@ -172,7 +169,7 @@ class Recording:
                 problem = self._header_problem(f, pos, opcode, length)
                 if problem is not None:
                     # the length (or opcode) cannot be trusted: find the next record instead
-                    nxt = self._resync(f, pos + 1)
+                    nxt = resync(f, pos + 1, self.size)
                     if nxt is None:
                         self._stop(pos, problem, truncated=True)
                         return
@@ -186,7 +183,7 @@ class Recording:
                     return
                 if (
                     opcode in _SKIPPED_OPCODES
-                    or opcode not in _SPEC_OPCODES
+                    or opcode not in SPEC_OPCODES
                     or (opcode == Opcode.ATTACHMENT and not want_attachments)
                 ):
                     pos = end
@@ -200,8 +197,8 @@ class Recording:
                 except BadRecord as exc:
                     if opcode == Opcode.CHUNK:
                         self.report.skipped_chunks.append((pos, exc.reason))
-                    if not self._plausible(f, end, depth=1):
-                        nxt = self._resync(f, pos + 1)
+                    if not plausible(f, end, self.size, depth=1):
+                        nxt = resync(f, pos + 1, self.size)
                         if nxt is None:
                             self._stop(pos, exc.reason, truncated=True)
                             return
@@ -221,7 +218,7 @@ class Recording:
         if (
             opcode in _LOADED_OPCODES
             and length > mcap_records.MAX_RECORD_BYTES
-            and not self._plausible(f, pos + RECORD_HEADER.size + length, depth=1)
+            and not plausible(f, pos + RECORD_HEADER.size + length, self.size, depth=1)
         ):
             # a long record is real only if the file goes on with records where it ends
             return (
@@ -231,38 +228,6 @@ class Recording:
             )
         if opcode == Opcode.CHUNK and not chunk_header_ok(peek(f, pos, 64), length):
             return f"chunk at offset {pos} has inconsistent length fields"
-        return None
-
-    def _plausible(self, f: io.BufferedReader, pos: int, depth: int = 2) -> bool:
-        """Whether a record (and the ``depth`` records after it) could start at ``pos``."""
-        for _ in range(depth + 1):
-            if pos == self.size or (pos == self.size - len(MAGIC) and peek(f, pos, 8) == MAGIC):
-                return True
-            head = peek(f, pos, 64)
-            if len(head) < RECORD_HEADER.size:
-                return False
-            opcode, length = RECORD_HEADER.unpack_from(head)
-            if opcode not in _SPEC_OPCODES or length > self.size - pos - RECORD_HEADER.size:
-                return False
-            if opcode == Opcode.CHUNK:
-                return chunk_header_ok(head, length)
-            if opcode == Opcode.FOOTER and pos + RECORD_HEADER.size + length != self.size - 8:
-                return False
-            pos += RECORD_HEADER.size + length
-        return True
-
-    def _resync(self, f: io.BufferedReader, start: int) -> int | None:
-        """Offset of the next plausible record at or after ``start``, or None."""
-        block = 4 << 20
-        base = start
-        while base < self.size:
-            data = peek(f, base, block + 16)
-            for m in _CANDIDATE.finditer(data):
-                if m.start() >= block:
-                    break
-                if self._plausible(f, base + m.start()):
-                    return base + m.start()
-            base += block
         return None
 
     def _stop(self, offset: int, reason: str, truncated: bool) -> None:
