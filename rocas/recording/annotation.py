@@ -34,7 +34,8 @@ class ChannelAnnotation:
 
 @dataclass(frozen=True)
 class AnnotateReport:
-    """What :func:`annotate_recording` copied and changed.
+    """What a copy (:func:`rocas.recording.annotate.annotate_recording`,
+    :func:`rocas.recording.convert.write_mcap`) copied and changed.
 
     Attributes:
         source: the input path.

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from rocas.recording.formats import open_recording
 from rocas.viz.fields import (
     ChannelReader,
     ObstacleFrame,
@@ -252,6 +251,8 @@ def _read_file_level(ex: Execution, rec: Any, name: str) -> None:
 
 def load_execution(path: str | os.PathLike[str]) -> Execution:
     """Read a recording once and keep what the scene and the signals need."""
+    from rocas.recording.formats import open_recording
+
     rec = open_recording(path)
     ex = Execution(Path(path))
     collected = _Pass(ex)
