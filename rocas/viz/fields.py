@@ -169,6 +169,7 @@ def _enum_paths(desc: Any, depth: int = 0) -> list[tuple[str, ...]]:
 
 
 def get(msg: Any, path: tuple[str, ...]) -> Any:
+    """The field at ``path`` (names, outermost first) of ``msg``."""
     for name in path:
         msg = getattr(msg, name)
     return msg
@@ -251,6 +252,8 @@ def _default_size(kind: str) -> tuple[float, float]:
 
 
 def read_obstacles(r: ChannelReader, msg: Any, t: float) -> ObstacleFrame:
+    """The obstacles of a message of an obstacle channel at ``t`` [s], in the world frame
+    (sizes the message lacks are the scenario's defaults for the obstacle's kind)."""
     items = list(getattr(msg, r.obstacles))
     n = len(items)
     xy = np.zeros((n, 2))
