@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rocas.errors import InputError, TopologyError
-from rocas.recording.reader import ChannelInfo
+from rocas.recording.model import ChannelInfo
 from rocas.recording.topology import (
     CONTROL_ROLE,
     READERS_KEY,
@@ -49,7 +49,7 @@ from rocas.recording.topology import (
 if TYPE_CHECKING:
     import networkx as nx
 
-    from rocas.recording.annotate import ChannelAnnotation
+    from rocas.recording.annotation import ChannelAnnotation
 
 CHANNEL, MODULE = "channel", "module"
 Node = tuple[str, str]  # (kind, name)
@@ -103,7 +103,7 @@ class CmgSpec:
 
     def annotations(self) -> dict[str, ChannelAnnotation]:
         """Per channel the file names: its writers and readers (for ``rocas annotate``)."""
-        from rocas.recording.annotate import ChannelAnnotation
+        from rocas.recording.annotation import ChannelAnnotation
 
         return {
             topic: ChannelAnnotation(

@@ -31,7 +31,9 @@ from rocas.analysis.pinpoint import PinpointResult, find_initial_module, past_th
 from rocas.analysis.series import REPEAT_S, ChannelAccount, ChannelSeries, compute_series
 from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
-from rocas.recording.reader import ChannelInfo, Recording, open_recording
+from rocas.recording.formats import open_recording
+from rocas.recording.model import ChannelInfo
+from rocas.recording.reader import Recording
 
 REORDER_WINDOW_S = 1.0  # how far out of log-time order a message may be written for one pass [s]
 #: Bins at the start of each channel, with messages in both recordings, over which two runs

@@ -48,7 +48,8 @@ from rocas.analysis.align import MAX_SPAN_S, Alignment, align, unflush
 from rocas.analysis.mdr import EXACT, Tolerance, mdr, repeated_lengths
 from rocas.analysis.noise import FieldRules, masked_mdr
 from rocas.errors import RecordingError
-from rocas.recording.reader import ChannelInfo, Recording
+from rocas.recording.model import ChannelInfo
+from rocas.recording.reader import Recording
 
 ACCIDENT, REFERENCE = 0, 1
 #: A message whose payload equals the one before it on its channel, logged within this of it,

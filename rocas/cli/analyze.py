@@ -166,7 +166,7 @@ def _use_stack_file(path: str, source: Any, out: Path) -> str:
 
     ext = ExternalStack.from_file(Path(path).resolve(), (out / "external").resolve())
     if isinstance(source, Path):
-        from rocas.recording.reader import open_recording
+        from rocas.recording.formats import open_recording
         from rocas.recording.topology import STACK_METADATA
 
         meta = dict(open_recording(str(source)).scan().metadata)

@@ -25,7 +25,8 @@ from rocas.analysis.cmg import (
 from rocas.cli.console import Env, prose, safe
 from rocas.cli.inputs import load_cmg_file
 from rocas.errors import RecordingError, TopologyError
-from rocas.recording.reader import DECODABLE_ENCODINGS, ChannelInfo, open_recording
+from rocas.recording.formats import open_recording
+from rocas.recording.model import DECODABLE_ENCODINGS, ChannelInfo
 
 HELP = "show who writes and reads each channel of a recording, and what is missing"
 

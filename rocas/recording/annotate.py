@@ -21,7 +21,6 @@ from __future__ import annotations
 import os
 import struct
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -44,14 +43,11 @@ from mcap.writer import Writer as McapWriter
 
 from rocas._fs import atomic_path, refuse_overwriting
 from rocas.errors import RecordingError, TopologyError
-from rocas.recording.reader import MAGIC, ChannelInfo, describe_error, open_recording
-from rocas.recording.topology import (
-    CONTROL_ROLE,
-    READERS_KEY,
-    ROLE_KEY,
-    WRITERS_KEY,
-    join_modules,
-)
+from rocas.recording.annotation import AnnotateReport, ChannelAnnotation, annotated_metadata
+from rocas.recording.convert import write_mcap
+from rocas.recording.formats import open_recording
+from rocas.recording.mcap_records import MAGIC
+from rocas.recording.model import ChannelInfo, describe_error
 
 _COMPRESSION = {"": CompressionType.NONE, "zstd": CompressionType.ZSTD,
                 "lz4": CompressionType.LZ4}
@@ -62,80 +58,6 @@ _DEFAULT_CHUNK_SIZE = 1 << 20  # [bytes] mcap's default
 MCAP_CLI = ("the mcap CLI, a separate download from the foxglove/mcap releases; "
             "'rerun mcap check FILE', installed with rocas, shows where the damage is")
 REPAIR_HINT = f"repair it with 'mcap recover' first ({MCAP_CLI})"
-
-
-@dataclass(frozen=True)
-class ChannelAnnotation:
-    """The modules that write and read one channel.
-
-    An empty side keeps what the recording says (like ``--cmg``, which only replaces the
-    writers or readers it names).
-    """
-
-    writers: tuple[str, ...] = ()
-    readers: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class AnnotateReport:
-    """What :func:`annotate_recording` copied and changed.
-
-    Attributes:
-        source: the input path.
-        output: the output path.
-        profile: the MCAP profile copied from the header (e.g. ``"ros1"``, ``""``).
-        compression: chunk compression of the output: ``"zstd"``, ``"lz4"``, ``""`` (chunked,
-            uncompressed) or ``None`` (unchunked file).
-        schemas: schema records copied.
-        channels: channel records copied.
-        messages: message records copied.
-        attachments: attachment records copied.
-        metadata: metadata records copied.
-        annotated: topics whose channel metadata was changed.
-        control_channel: the channel marked ``rocas.role = control``, if one was asked for.
-        missing: topics named in the annotations that the recording does not have.
-    """
-
-    source: str
-    output: str
-    profile: str
-    compression: str | None
-    schemas: int
-    channels: int
-    messages: int
-    attachments: int
-    metadata: int
-    annotated: tuple[str, ...]
-    control_channel: str | None
-    missing: tuple[str, ...] = field(default=())
-
-
-def annotated_metadata(
-    metadata: Mapping[str, str],
-    topic: str,
-    annotation: ChannelAnnotation | None,
-    control_channel: str | None,
-) -> dict[str, str]:
-    """The metadata a channel gets in the annotated file (other keys are kept as they are).
-
-    Args:
-        metadata: the channel's metadata in the input.
-        topic: the channel's topic.
-        annotation: its writers/readers, or None to keep the recorded ones.
-        control_channel: when given, this topic gets ``rocas.role = control`` and every
-            other channel loses a ``control`` role.
-    """
-    out = dict(metadata)
-    if annotation is not None:
-        for key, modules in ((WRITERS_KEY, annotation.writers), (READERS_KEY, annotation.readers)):
-            if value := join_modules(modules):
-                out[key] = value
-    if control_channel is not None:
-        if topic == control_channel:
-            out[ROLE_KEY] = CONTROL_ROLE
-        elif out.get(ROLE_KEY, "").strip().lower() == CONTROL_ROLE:
-            del out[ROLE_KEY]
-    return out
 
 
 def read_channels(
@@ -375,8 +297,6 @@ def annotate_recording(
     src, dst = Path(source), Path(output)
     rec = open_recording(src)  # the uniform checks: exists, is a file, is a recording
     if rec.format != "mcap":  # a ROS bag or Cyber record: written out as MCAP
-        from rocas.recording.convert import write_mcap
-
         return write_mcap(rec, dst, annotations, control_channel)  # type: ignore[arg-type]
     refuse_overwriting(src, dst)
     chunk_size = _chunk_size(src)

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from rocas.recording.decoding import DecoderCache
-from rocas.recording.reader import (
+from rocas.recording.model import (
     ChannelInfo,
     ChannelStats,
     DecodedMessage,

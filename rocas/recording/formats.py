@@ -1,4 +1,5 @@
-"""Which recording format a path holds, from its first bytes (not its name).
+"""Which recording format a path holds, from its first bytes (not its name), and the reader
+that opens it (:func:`open_recording`, the one entry point of every reader).
 
 ========================  =======================================  ==============================
 format                    recognised by                            read by
@@ -11,13 +12,21 @@ format                    recognised by                            read by
 ========================  =======================================  ==============================
 
 Anything else is refused in one line that names what the file looks like and what to do.
+
+This module sits above the readers: it imports them, none of them imports it.
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rocas.errors import InputError, RecordingError
+from rocas.recording.reader import Recording
+
+if TYPE_CHECKING:
+    from rocas.recording.decoding import DecoderCache
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 ROS1_MAGIC = b"#ROSBAG V2.0\n"
@@ -90,3 +99,33 @@ def sniff(path: Path) -> tuple[str, int]:
         f"rocas reads {READABLE}; convert other formats to MCAP (e.g. 'rosbags-convert' for ROS "
         "bags, installed with rocas)",
     )
+
+
+def open_recording(
+    path: str | os.PathLike[str], decoders: DecoderCache | None = None
+) -> Recording:
+    """Open a recording for streaming, whatever its format; raises :class:`InputError` if it
+    is none rocas reads.
+
+    The format is recognised from the file's first bytes (:func:`sniff`): MCAP is read by
+    :class:`~rocas.recording.reader.Recording`; ROS 1 bags and rosbag2 recordings by
+    :mod:`rocas.recording.rosbag`, Cyber RT records by :mod:`rocas.recording.cyber`, each
+    with :class:`~rocas.recording.reader.Recording`'s interface (``format`` tells them apart).
+    Pass one :class:`~rocas.recording.decoding.DecoderCache` to several recordings to decode
+    identical schemas into identical classes.
+    """
+    p = Path(path)
+    kind, size = sniff(p)
+    if kind == "ros1":
+        from rocas.recording.rosbag import Ros1Recording
+
+        return Ros1Recording(p, size, decoders)  # type: ignore[return-value]
+    if kind == "rosbag2":
+        from rocas.recording.rosbag import Rosbag2Recording
+
+        return Rosbag2Recording(p, size, decoders)  # type: ignore[return-value]
+    if kind == "cyber":
+        from rocas.recording.cyber import CyberRecording
+
+        return CyberRecording(p, size, decoders)  # type: ignore[return-value]
+    return Recording(path, decoders)

@@ -31,7 +31,7 @@ from typing import Any
 from rocas.errors import RecordingError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.foreign import ForeignRecording, Walked
-from rocas.recording.reader import ChannelInfo, describe_error
+from rocas.recording.model import ChannelInfo, describe_error
 from rocas.recording.topology import ROS1_CALLERID_KEY
 
 

@@ -16,7 +16,8 @@ import numpy as np
 
 from rocas.errors import RecordingError, UsageError
 from rocas.msgs import localization_pb2, perception_pb2
-from rocas.recording.reader import ChannelInfo, open_recording
+from rocas.recording.formats import open_recording
+from rocas.recording.model import ChannelInfo
 from rocas.recording.topology import (
     EGO_METADATA,
     RUN_METADATA,

@@ -231,7 +231,7 @@ class ExternalStack:
         r = self.simulate_batch([scenario], [params], [seed])
         recording, messages = None, 0
         if output is not None:
-            from rocas.recording.reader import open_recording
+            from rocas.recording.formats import open_recording
 
             one = self.run(scenario, params, seed)
             part = f"{os.fspath(output)}.part"
@@ -313,7 +313,7 @@ _DECLARED = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace
 
 def read_outcome(path: str | os.PathLike[str]) -> Outcome:
     """The ``rocas.run`` record of a recording as an :class:`Outcome`."""
-    from rocas.recording.reader import open_recording
+    from rocas.recording.formats import open_recording
 
     meta = dict(open_recording(str(path)).scan().metadata).get(RUN_METADATA)
     if meta is None:

@@ -36,7 +36,8 @@ from rocas.viz.analysis import (  # noqa: E402
     write_recording_rrd,
     write_run_dir_rrd,
 )
-from rocas.viz.scene import load_execution, log_scene  # noqa: E402
+from rocas.viz.execution import load_execution  # noqa: E402
+from rocas.viz.scene import log_scene  # noqa: E402
 from rocas.viz.search import log_search  # noqa: E402
 from rocas.viz.signals import log_signals  # noqa: E402
 

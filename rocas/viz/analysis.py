@@ -26,14 +26,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rocas.errors import InputError
-from rocas.viz.scene import (
-    BACKGROUND_RGB,
-    MAX_CHANNELS_SHOWN,
-    TIMELINE,
-    Execution,
-    load_execution,
-    log_scene,
-)
+from rocas.viz.draw import BACKGROUND_RGB, TIMELINE
+from rocas.viz.execution import MAX_CHANNELS_SHOWN, Execution, load_execution
+from rocas.viz.scene import log_scene
 from rocas.viz.signals import log_signals
 from rocas.viz.stream import rrd_recording
 

@@ -82,22 +82,60 @@ def log_search(
         return
     base = f"search/{phase}"
     gens = np.array([g.generation for g in generations], dtype=np.int64)
-
-    def index(values: Any) -> list[Any]:
-        return [rr.TimeColumn(TIMELINE, sequence=values)]
-
     n_obj = max((g.objectives.shape[1] for g in generations if g.objectives.ndim == 2), default=0)
     names = list(objective_names or OBJECTIVE_NAMES.get(phase, ()))[:n_obj]
     names += [f"f{j + 1}" for j in range(len(names), n_obj)]
+    _log_objectives(rec, base, phase, gens, generations, names)
+    _log_counts(rec, base, phase, gens, generations)
+    if n_obj >= 2:
+        _log_population(rec, base, gens, generations)
+    if best_labels:
+        k = min(len(best_labels), len(gens))
+        rec.send_columns(
+            f"{base}/best_candidate",
+            indexes=_index(gens[:k]),
+            columns=rr.TextLog.columns(text=[str(s) for s in best_labels[:k]]),
+        )
+    log_tried(rec, base, generations, outcome or (best_labels[-1] if best_labels else None))
+    rec.log(
+        f"{base}/summary",
+        rr.TextDocument(summary_markdown(phase, generations, names, best_labels), media_type="text/markdown"),
+        static=True,
+    )
+
+
+def _index(values: Any) -> list[Any]:
+    """The ``generation`` index of rows at ``values`` (generation numbers)."""
+    import rerun as rr
+
+    return [rr.TimeColumn(TIMELINE, sequence=values)]
+
+
+def _feasible(g: GenerationStats, n: int) -> np.ndarray:
+    """Which of the ``n`` members of ``g`` avoid the accident (all False without constraints)."""
+    return np.asarray(g.constraints) <= 0 if len(g.constraints) == n else np.zeros(n, bool)
+
+
+def _best_feasible(generations: list[GenerationStats], n_obj: int) -> np.ndarray:
+    """(generations, n_obj): per objective, the smallest value of a feasible member so far
+    (inf until a generation has one)."""
     best_so_far = np.full(n_obj, np.inf)
     best_rows: list[np.ndarray] = []
     for g in generations:
         obj = g.objectives if g.objectives.ndim == 2 else np.zeros((0, n_obj))
-        feas = np.asarray(g.constraints) <= 0 if len(g.constraints) == len(obj) else np.zeros(len(obj), bool)
+        feas = _feasible(g, len(obj))
         if feas.any():
             best_so_far = np.minimum(best_so_far, np.nanmin(np.where(feas[:, None], obj, np.inf), axis=0))
         best_rows.append(best_so_far.copy())
-    best = np.array(best_rows).reshape(len(generations), n_obj)
+    return np.array(best_rows).reshape(len(generations), n_obj)
+
+
+def _log_objectives(rec: Any, base: str, phase: str, gens: np.ndarray,
+                    generations: list[GenerationStats], names: list[str]) -> None:
+    """``objectives/<name>`` (every member's value) and ``best/<name>`` (best feasible so far)."""
+    import rerun as rr
+
+    best = _best_feasible(generations, len(names))
     for j, name in enumerate(names):
         counts, values = [], []
         for g in generations:
@@ -108,7 +146,7 @@ def log_search(
         if sum(counts):
             rec.send_columns(
                 f"{base}/objectives/{name}",
-                indexes=index(gens),
+                indexes=_index(gens),
                 columns=rr.Scalars.columns(scalars=np.concatenate(values)).partition(counts),
             )
             rec.log(
@@ -120,7 +158,7 @@ def log_search(
         if ok.any():
             rec.send_columns(
                 f"{base}/best/{name}",
-                indexes=index(gens[ok]),
+                indexes=_index(gens[ok]),
                 columns=rr.Scalars.columns(scalars=best[ok, j]),
             )
             rec.log(
@@ -128,6 +166,13 @@ def log_search(
                 rr.SeriesLines(names=f"{phase} best feasible {name}", widths=2.5),
                 static=True,
             )
+
+
+def _log_counts(rec: Any, base: str, phase: str, gens: np.ndarray,
+                generations: list[GenerationStats]) -> None:
+    """``feasible``, ``evaluations`` and ``best_constraint`` per generation."""
+    import rerun as rr
+
     for entity, values, color in (
         ("feasible", [g.feasible for g in generations], FEASIBLE_RGB),
         ("evaluations", [g.evaluations for g in generations], (90, 90, 200)),
@@ -137,46 +182,36 @@ def log_search(
         ok = np.isfinite(arr)
         if ok.any():
             rec.send_columns(
-                f"{base}/{entity}", indexes=index(gens[ok]), columns=rr.Scalars.columns(scalars=arr[ok])
+                f"{base}/{entity}", indexes=_index(gens[ok]), columns=rr.Scalars.columns(scalars=arr[ok])
             )
             rec.log(
                 f"{base}/{entity}",
                 rr.SeriesLines(names=f"{phase} {entity.replace('_', ' ')}", colors=[color]),
                 static=True,
             )
-    if n_obj >= 2:
-        pos, col, counts = [], [], []
-        for g in generations:
-            obj = g.objectives[:, :2]
-            ok = np.isfinite(obj).all(axis=1)
-            feas = (
-                (np.asarray(g.constraints) <= 0)
-                if len(g.constraints) == len(obj)
-                else np.zeros(len(obj), bool)
-            )
-            pos.append(obj[ok])
-            col += [FEASIBLE_RGB if f else INFEASIBLE_RGB for f in feas[ok]]
-            counts.append(int(ok.sum()))
-        if sum(counts):
-            rec.send_columns(
-                f"{base}/population",
-                indexes=index(gens),
-                columns=rr.Points2D.columns(positions=np.concatenate(pos), colors=col).partition(counts),
-            )
-            rec.log(f"{base}/population", rr.Points2D.from_fields(radii=-4.0), static=True)
-    if best_labels:
-        k = min(len(best_labels), len(gens))
+
+
+def _log_population(rec: Any, base: str, gens: np.ndarray,
+                    generations: list[GenerationStats]) -> None:
+    """``population``: each generation in the plane of the first two objectives, coloured by
+    feasibility."""
+    import rerun as rr
+
+    pos, col, counts = [], [], []
+    for g in generations:
+        obj = g.objectives[:, :2]
+        ok = np.isfinite(obj).all(axis=1)
+        feas = _feasible(g, len(obj))
+        pos.append(obj[ok])
+        col += [FEASIBLE_RGB if f else INFEASIBLE_RGB for f in feas[ok]]
+        counts.append(int(ok.sum()))
+    if sum(counts):
         rec.send_columns(
-            f"{base}/best_candidate",
-            indexes=index(gens[:k]),
-            columns=rr.TextLog.columns(text=[str(s) for s in best_labels[:k]]),
+            f"{base}/population",
+            indexes=_index(gens),
+            columns=rr.Points2D.columns(positions=np.concatenate(pos), colors=col).partition(counts),
         )
-    log_tried(rec, base, generations, outcome or (best_labels[-1] if best_labels else None))
-    rec.log(
-        f"{base}/summary",
-        rr.TextDocument(summary_markdown(phase, generations, names, best_labels), media_type="text/markdown"),
-        static=True,
-    )
+        rec.log(f"{base}/population", rr.Points2D.from_fields(radii=-4.0), static=True)
 
 
 #: Size of the ``tried`` plot [view units]: simulations across, constraint values up.

@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from rocas.viz.scene import TIMELINE, ChannelSeries, Execution
+from rocas.viz.draw import TIMELINE
+from rocas.viz.execution import ChannelSeries, Execution
 
 #: Series colour per execution name.
 EXECUTION_COLORS = {"accident": (220, 50, 47), "reference": (40, 170, 80), "fixed": (40, 110, 230)}
@@ -82,29 +83,43 @@ def log_signals(
 
     Args:
         rec: an open ``rerun.RecordingStream``.
-        ex: the execution (see :func:`rocas.viz.scene.load_execution`).
+        ex: the execution (see :func:`rocas.viz.execution.load_execution`).
         prefix: entity subtree, e.g. ``executions/accident``.
         label: the execution's name in series names (default: last segment of ``prefix``).
         channels: also log every numeric field of every channel under ``channels/``.
     """
-    import rerun as rr
-
     label = label or prefix.rsplit("/", 1)[-1]
     color = EXECUTION_COLORS.get(label, (200, 120, 30))
     s = f"{prefix}/signals"
-
-    speed = _find(ex, ("speed_mps", "speed"), prefer=("chassis", "vehicle", "state", "canbus"))
-    pose = _find(ex, ("pose.linear_velocity.x", "linear_velocity.x", "velocity.x"))
-    speed_t = speed_v = None
-    if speed is not None:
-        c, k = speed
-        speed_t, speed_v = c.times_s, c.values[:, k]
-    elif pose is not None:
-        c, k = pose
-        speed_t, speed_v = c.times_s, np.hypot(c.values[:, k], c.values[:, k + 1])
+    speed_t, speed_v = _speed(ex)
     if speed_t is not None:
         _series(rec, f"{s}/speed", speed_t, speed_v, f"{label} speed [m/s]", color)
+    _log_acceleration(rec, s, ex, label, color, speed_t, speed_v)
+    _log_brake(rec, s, ex, label, color)
+    if ex.events:
+        _log_decisions(rec, s, ex)
+    if channels:
+        _log_channels(rec, prefix, ex)
 
+
+def _speed(ex: Execution) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(times [s], speed [m/s]): a chassis speed field, else the norm of the pose velocity;
+    (None, None) when the execution has neither."""
+    speed = _find(ex, ("speed_mps", "speed"), prefer=("chassis", "vehicle", "state", "canbus"))
+    pose = _find(ex, ("pose.linear_velocity.x", "linear_velocity.x", "velocity.x"))
+    if speed is not None:
+        c, k = speed
+        return c.times_s, c.values[:, k]
+    if pose is not None:
+        c, k = pose
+        return c.times_s, np.hypot(c.values[:, k], c.values[:, k + 1])
+    return None, None
+
+
+def _log_acceleration(rec: Any, s: str, ex: Execution, label: str, color: tuple[int, int, int],
+                      speed_t: np.ndarray | None, speed_v: np.ndarray | None) -> None:
+    """``acceleration/commanded`` (the control channel's) and ``acceleration/measured`` (the
+    pose's along the heading, else the derivative of the speed) [m/s^2]."""
     cmd = _find(ex, ("acceleration", "accel"), prefer=_control_channels(ex) or ("control",))
     if cmd is not None:
         c, k = cmd
@@ -124,7 +139,7 @@ def log_signals(
         h = c.values[:, head[1]]
         along = c.values[:, k] * np.cos(h) + c.values[:, k + 1] * np.sin(h)
         _series(rec, f"{s}/acceleration/measured", c.times_s, along, f"{label} measured [m/s²]", color, 2.5)
-    elif speed_t is not None and len(speed_t) > 2:
+    elif speed_t is not None and speed_v is not None and len(speed_t) > 2:
         _series(
             rec,
             f"{s}/acceleration/measured",
@@ -135,42 +150,56 @@ def log_signals(
             2.5,
         )
 
-    prob = _find(ex, ("brake_probability",))
-    if prob is not None:
-        c, k = prob
-        _series(
-            rec, f"{s}/brake/probability", c.times_s, c.values[:, k], f"{label} brake probability", color, 2.0
-        )
-        if "brake_threshold" in c.names:
-            _series(
-                rec,
-                f"{s}/brake/threshold",
-                c.times_s,
-                c.values[:, c.names.index("brake_threshold")],
-                f"{label} brake threshold",
-                THRESHOLD_COLOR,
-                1.0,
-            )
 
-    if ex.events:
-        rec.send_columns(
-            f"{s}/decisions",
-            indexes=[rr.TimeColumn(TIMELINE, duration=[e[0] for e in ex.events])],
-            columns=rr.TextLog.columns(
-                text=[f"{e[1]}: {e[2]}" for e in ex.events], level=[_level(e[2]) for e in ex.events]
-            ),
+def _log_brake(rec: Any, s: str, ex: Execution, label: str, color: tuple[int, int, int]) -> None:
+    """``brake/probability`` and ``brake/threshold``: the brake classifier's output and the
+    threshold in force."""
+    prob = _find(ex, ("brake_probability",))
+    if prob is None:
+        return
+    c, k = prob
+    _series(
+        rec, f"{s}/brake/probability", c.times_s, c.values[:, k], f"{label} brake probability", color, 2.0
+    )
+    if "brake_threshold" in c.names:
+        _series(
+            rec,
+            f"{s}/brake/threshold",
+            c.times_s,
+            c.values[:, c.names.index("brake_threshold")],
+            f"{label} brake threshold",
+            THRESHOLD_COLOR,
+            1.0,
         )
-    if channels:
-        for c in ex.channels.values():
-            if len(c.times_s) == 0 or not c.names:
-                continue
-            entity = f"{prefix}/channels/{entity_name(c.topic)}"
-            rec.send_columns(
-                entity,
-                indexes=[rr.TimeColumn(TIMELINE, duration=c.times_s)],
-                columns=rr.Scalars.columns(scalars=np.where(np.isfinite(c.values), c.values, np.nan)),
-            )
-            rec.log(entity, rr.SeriesLines(names=c.names), static=True)
+
+
+def _log_decisions(rec: Any, s: str, ex: Execution) -> None:
+    """``decisions``: the execution's events as text log lines (warnings for e-stops)."""
+    import rerun as rr
+
+    rec.send_columns(
+        f"{s}/decisions",
+        indexes=[rr.TimeColumn(TIMELINE, duration=[e[0] for e in ex.events])],
+        columns=rr.TextLog.columns(
+            text=[f"{e[1]}: {e[2]}" for e in ex.events], level=[_level(e[2]) for e in ex.events]
+        ),
+    )
+
+
+def _log_channels(rec: Any, prefix: str, ex: Execution) -> None:
+    """``channels/<topic>``: every numeric field of every channel, one series per field."""
+    import rerun as rr
+
+    for c in ex.channels.values():
+        if len(c.times_s) == 0 or not c.names:
+            continue
+        entity = f"{prefix}/channels/{entity_name(c.topic)}"
+        rec.send_columns(
+            entity,
+            indexes=[rr.TimeColumn(TIMELINE, duration=c.times_s)],
+            columns=rr.Scalars.columns(scalars=np.where(np.isfinite(c.values), c.values, np.nan)),
+        )
+        rec.log(entity, rr.SeriesLines(names=c.names), static=True)
 
 
 def _level(text: str) -> str:

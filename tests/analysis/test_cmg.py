@@ -15,8 +15,8 @@ from rocas.analysis.cmg import (
     resolve_topology,
 )
 from rocas.errors import InputError, TopologyError
-from rocas.recording.annotate import ChannelAnnotation
-from rocas.recording.reader import ChannelInfo
+from rocas.recording.annotation import ChannelAnnotation
+from rocas.recording.model import ChannelInfo
 
 
 def chan(cid: int, topic: str, **meta: str) -> ChannelInfo:

@@ -26,7 +26,8 @@ from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
 from rocas.viz.analysis import write_analysis_rrd
-from rocas.viz.scene import load_execution, log_scene
+from rocas.viz.execution import load_execution
+from rocas.viz.scene import log_scene
 from rocas.viz.signals import log_signals
 from rocas.viz.stream import rrd_recording
 

@@ -10,7 +10,7 @@ import signal
 
 import pytest
 
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 
 
 def _on_call(monkeypatch, target: str, calls: int, action) -> None:

@@ -3,7 +3,7 @@ import json
 
 from rocas.cli.console import Env
 from rocas.cli.main import main
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 
 
 def _run(*argv):

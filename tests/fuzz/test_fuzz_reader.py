@@ -17,7 +17,7 @@ import pytest
 from fuzz.mutate import KINDS, case, layout, load_seeds, run_one, write_seeds
 
 from rocas.recording import open_recording
-from rocas.recording.reader import MAX_CHUNK_BYTES
+from rocas.recording.mcap_records import MAX_CHUNK_BYTES
 
 READER_INPUTS = 360
 DIFF_INPUTS = 120

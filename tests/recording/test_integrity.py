@@ -7,8 +7,8 @@ import pytest
 from mcap.writer import Writer
 
 from rocas.recording import RecordingWriter
+from rocas.recording.formats import open_recording
 from rocas.recording.integrity import CHECKSUM_KEY, checksum_problem, with_checksum
-from rocas.recording.reader import open_recording
 from rocas.replay.reconstruction import reconstruct
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"

@@ -8,7 +8,7 @@ from mcap.writer import CompressionType, Writer
 
 from rocas.errors import InputError, RecordingError
 from rocas.msgs import control_pb2, planning_pb2
-from rocas.recording import RecordingWriter, open_recording, reader
+from rocas.recording import RecordingWriter, mcap_records, open_recording
 
 
 def _write(path, n=300, chunk_size=2048, compression="zstd"):
@@ -179,8 +179,8 @@ def test_a_record_over_the_memory_limit_is_read_when_it_fits_the_file(
     tmp_path, monkeypatch, chunked
 ):
     # the limits stand for 512 MiB: a 10 KiB message plays a 600 MiB one
-    monkeypatch.setattr(reader, "MAX_RECORD_BYTES", 4096)
-    monkeypatch.setattr(reader, "MAX_CHUNK_BYTES", 4096)
+    monkeypatch.setattr(mcap_records, "MAX_RECORD_BYTES", 4096)
+    monkeypatch.setattr(mcap_records, "MAX_CHUNK_BYTES", 4096)
     payload = random.Random(0).randbytes(10_000)  # incompressible: the file holds it all
     rec = open_recording(_one_big_message(tmp_path / "big.mcap", payload, chunked))
     msgs = list(rec.messages())
@@ -190,7 +190,7 @@ def test_a_record_over_the_memory_limit_is_read_when_it_fits_the_file(
 
 
 def test_a_long_length_that_ends_inside_a_record_is_still_damage(tmp_path, monkeypatch):
-    monkeypatch.setattr(reader, "MAX_RECORD_BYTES", 4096)
+    monkeypatch.setattr(mcap_records, "MAX_RECORD_BYTES", 4096)
     payloads = [json.dumps({"i": i, "pad": "x" * 1000}).encode() for i in range(8)]
     path = tmp_path / "u.mcap"
     offsets = _unchunked(path, payloads)
@@ -206,7 +206,7 @@ def test_a_long_length_that_ends_inside_a_record_is_still_damage(tmp_path, monke
 
 
 def test_a_chunk_inflating_beyond_the_limit_and_the_file_size_is_skipped(tmp_path, monkeypatch):
-    monkeypatch.setattr(reader, "MAX_CHUNK_BYTES", 4096)
+    monkeypatch.setattr(mcap_records, "MAX_CHUNK_BYTES", 4096)
     path = _one_big_message(tmp_path / "z.mcap", bytes(10_000), chunked=True)
     assert path.stat().st_size < 10_000  # zeros compress: the chunk inflates past the file
     rec = open_recording(path)
@@ -229,9 +229,9 @@ def test_a_zstd_chunk_inflates_whether_it_is_one_frame_or_several(frames):
     data = b"".join(zstandard.ZstdCompressor().compress(p) for p in parts)
     chunk = Chunk(compression="zstd", data=data, message_start_time=0, message_end_time=0,
                   uncompressed_crc=zlib.crc32(raw), uncompressed_size=len(raw))
-    assert reader._inflate(chunk, 1 << 20) == raw
-    assert (reader._inflate_one_frame(data, len(raw)) is None) == (frames == 2)
+    assert mcap_records.inflate(chunk, 1 << 20) == raw
+    assert (mcap_records.inflate_one_frame(data, len(raw)) is None) == (frames == 2)
     short = Chunk(compression="zstd", data=data, message_start_time=0, message_end_time=0,
                   uncompressed_crc=0, uncompressed_size=len(raw) + 1)
     with pytest.raises(ValueError, match="inflates to"):
-        reader._inflate(short, 1 << 20)
+        mcap_records.inflate(short, 1 << 20)

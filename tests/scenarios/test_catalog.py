@@ -23,7 +23,7 @@ from rocas.catalog import (
     scenario_toml,
     trajectory_rmse,
 )
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import simulate_batch
 from rocas.scenarios.loader import scenario_from_dict
 from rocas.stacks.ads.params import PARAMETERS

@@ -19,7 +19,7 @@ from rocas.catalog import (
     stacks_with_catalog,
 )
 from rocas.errors import ScenarioError, UsageError
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import simulate, simulate_batch
 from rocas.stacks.lav.planner import COLLIDE_HOLD_S
 from rocas.stacks.registry import get_stack

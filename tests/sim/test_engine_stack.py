@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from rocas.msgs import control_pb2
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.scenarios import scenario_from_dict
 from rocas.sim.engine import simulate, simulate_batch
 from rocas.sim.protocol import Actuation, Observation, StackRun

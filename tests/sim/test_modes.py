@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import simulate, simulate_batch
 from rocas.scenarios import load_example, scenario_from_dict
 from rocas.stacks.ads.topics import CHANNELS, EGO_METADATA, WORLD_ATTACHMENT

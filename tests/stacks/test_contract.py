@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rocas.catalog import entries
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import rollout, rollout_batch
 from rocas.stacks import registry
 from rocas.stacks.base import CAPABILITIES, SelfSimulating, StackParams

@@ -10,7 +10,7 @@ import pytest
 
 from rocas.catalog import entry
 from rocas.errors import UsageError
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import rollout
 from rocas.stacks.external import ExternalStack
 from rocas.stacks.registry import get_stack

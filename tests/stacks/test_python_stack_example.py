@@ -4,7 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "python_stack.py"
 

@@ -76,7 +76,7 @@ def test_the_built_in_ads_through_the_protocol_drives_as_the_engine_does():
 
 
 def test_a_lav_recording_carries_its_topology_world_and_stack_name(tmp_path):
-    from rocas.recording.reader import open_recording
+    from rocas.recording.formats import open_recording
 
     lav = registry.get_stack("lav")
     out = tmp_path / "run.mcap"

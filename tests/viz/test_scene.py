@@ -7,14 +7,16 @@ import pytest
 from foreign_stack import make_pair
 from rrd import read_rrd
 
-from rocas.recording.reader import open_recording
+from rocas.recording.formats import open_recording
 from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
-from rocas.viz.scene import actor_names, light_color_at, load_execution, log_scene
+from rocas.viz.execution import load_execution
+from rocas.viz.scene import actor_names, log_scene
 from rocas.viz.search import generations_from_json, log_search
 from rocas.viz.signals import log_signals
 from rocas.viz.stream import rrd_recording
+from rocas.viz.world import light_color_at
 
 
 @pytest.fixture(scope="module")
@@ -181,7 +183,7 @@ def test_a_light_label_keeps_off_the_road_around_the_light(name):
     from pathlib import Path
 
     from rocas.viz.labels import LabelItem, label_rects, place_labels
-    from rocas.viz.scene import road_patches
+    from rocas.viz.world import road_patches
 
     path = Path(__file__).parents[2] / "recordings" / f"{name}.mcap"
     world = load_execution(path).world
@@ -197,11 +199,11 @@ def test_a_light_label_keeps_off_the_road_around_the_light(name):
 
 def test_a_recording_with_too_many_channels_shows_the_first_ones_and_says_so(tmp_path,
                                                                                monkeypatch):
-    import rocas.viz.scene as scene
+    import rocas.viz.execution as execution
 
     pair = make_pair(tmp_path)
-    monkeypatch.setattr(scene, "MAX_CHANNELS_SHOWN", 3)
-    ex = scene.load_execution(pair.accident)
+    monkeypatch.setattr(execution, "MAX_CHANNELS_SHOWN", 3)
+    ex = execution.load_execution(pair.accident)
     assert len(ex.channels) <= 3
     assert any("channels are not shown" in w and "first 3 channels" in w for w in ex.warnings)
 

@@ -12,7 +12,7 @@ from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.viz.analysis import write_analysis_rrd
 from rocas.viz.diff import ORANGE, RED, write_diff_rrd
-from rocas.viz.scene import BACKGROUND_RGB
+from rocas.viz.draw import BACKGROUND_RGB
 from rocas.viz.screenshot import screenshot_rrd, unavailable_reason
 
 pytestmark = [pytest.mark.slow,
