@@ -105,7 +105,6 @@ class PerceptionOutput:
     tl_selected: np.ndarray
 
 
-
 @dataclass(frozen=True, eq=False)
 class SensorView:
     """Where each obstacle is seen from the true ego pose, each (N, M): rx (forward), ry
@@ -139,7 +138,6 @@ class Measurement:
     yaw: np.ndarray
     length: np.ndarray
     width: np.ndarray
-
 
 
 def no_lights(n: int) -> dict[str, np.ndarray]:

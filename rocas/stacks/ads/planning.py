@@ -2,6 +2,8 @@
 decisions, ST-overlap yield/overtake, traffic lights, perception brake, collision check.
 
 All quantities are along the ego reference line (route s, lateral offset positive left).
+:meth:`Planning.step` takes one decision per helper; the values passed between them are the
+frozen records of :mod:`rocas.stacks.ads.planning_values`.
 """
 
 from __future__ import annotations
