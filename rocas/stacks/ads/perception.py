@@ -105,6 +105,40 @@ class PerceptionOutput:
     tl_selected: np.ndarray
 
 
+@dataclass(frozen=True, eq=False)
+class SensorView:
+    """Where each obstacle is seen from the true ego pose, each (N, M): rx (forward), ry
+    (left) [m] in the ego frame, dist [m], bearing [rad]."""
+
+    rx: np.ndarray
+    ry: np.ndarray
+    dist: np.ndarray
+    bearing: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Detection:
+    """What the detector reports this cycle, each (N, M): detected (bool), confidence
+    [0, 1], visible (fraction not occluded), eff_range (the detection range after the
+    weather and the glare) [m]."""
+
+    detected: np.ndarray
+    confidence: np.ndarray
+    visible: np.ndarray
+    eff_range: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Measurement:
+    """The detector's noisy boxes in the world frame, each (N, M): x, y [m], yaw [rad] in
+    [-pi/2, pi/2) (orientation modulo pi), length, width [m]."""
+
+    x: np.ndarray
+    y: np.ndarray
+    yaw: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+
 
 def no_lights(n: int) -> dict[str, np.ndarray]:
     """The traffic-light fields of a perception output for N variants in a world without lights."""
@@ -230,20 +264,47 @@ class Perception:
     def step(self, tick: int, ego_x: np.ndarray, ego_y: np.ndarray, ego_yaw: np.ndarray,
              gt: ObstacleFrame, light_colors: np.ndarray, loc: LocalizationOutput
              ) -> PerceptionOutput:
+        """One perception cycle: what the sensors detect, measured and tracked, classified,
+        the camera's brake decision and the traffic lights, published in the ego frame of the
+        localization estimate."""
         p = self.p
-        w = self.world
-        n, m = gt.x.shape
-        ce, se = np.cos(ego_yaw)[:, None], np.sin(ego_yaw)[:, None]
-        dxw, dyw = gt.x - ego_x[:, None], gt.y - ego_y[:, None]
-        rx = dxw * ce + dyw * se
-        ry = -dxw * se + dyw * ce
-        dist = np.hypot(rx, ry)
-        bearing = numerics.arctan2(ry, rx)
+        view = _sensor_view(ego_x, ego_y, ego_yaw, gt)
         factor, glare, _ = self._range_factor(ego_yaw)
         slots = self._slots(gt)
-        static_obj = slots["static_obj"]
+        det = self._detect(ego_x, ego_y, gt, view, slots, factor)
+        lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
+        meas = self._measure(tick, view, det, gt, ego_yaw, loc, lc, ls)
+        new = self._track(det.detected, meas)
+        self._resolve_heading(det.detected, new, meas.yaw)
+        published = (self.track_id >= 0) & (self.hits >= p["track_min_hits"][:, None])
+        typ, sub, color = self._classify(det.confidence, view.dist, slots, gt)
+        # publish in the ego frame of the localization estimate
+        ddx, ddy = self.tx - loc.x[:, None], self.ty - loc.y[:, None]
+        out_x = ddx * lc + ddy * ls
+        out_y = -ddx * ls + ddy * lc
+        brake_prob, brake = self._brake(view.bearing, view.dist, gt, det.visible * det.detected,
+                                        glare)
+        tl = self._lights(ego_x, ego_y, ego_yaw, light_colors, factor)
+        return PerceptionOutput(
+            published=published, track_id=self.track_id.copy(), type=typ, sub_type=sub,
+            color=color, x=out_x, y=out_y, theta=wrap_angle(self.theading - loc.heading[:, None]),
+            vx=self.tvx * lc + self.tvy * ls, vy=-self.tvx * ls + self.tvy * lc,
+            ax=self.tax * lc + self.tay * ls, ay=-self.tax * ls + self.tay * lc,
+            length=meas.length, width=meas.width, height=gt.height, confidence=det.confidence,
+            tracking_time=self.age, ego_x=loc.x, ego_y=loc.y, ego_heading=loc.heading,
+            brake_probability=brake_prob, brake_threshold=p["brake_threshold"], brake=brake,
+            **tl,
+        )
+
+    def _detect(self, ego_x: np.ndarray, ego_y: np.ndarray, gt: ObstacleFrame,
+                view: SensorView, slots: dict[str, np.ndarray], factor: np.ndarray
+                ) -> Detection:
+        """Which obstacles the detector reports: within the weather's range and the field of
+        view (or close behind), tall enough, visible enough and confident enough."""
+        p = self.p
+        dist = view.dist
         eff_range = slots["base_range"] * factor[:, None]
-        in_fov = (np.abs(bearing) <= self._weather()["fov_half"]) | (
+        in_fov = (np.abs(view.bearing) <= self._weather()["fov_half"]) | (
             dist <= p["rear_range_m"][:, None])
         visible = self._visibility(ego_x, ego_y, gt)
         conf = visible * clip(1.0 - p["confidence_range_decay"][:, None] * dist / eff_range,
@@ -251,13 +312,23 @@ class Perception:
         detected = ((dist <= eff_range) & in_fov & slots["tall"]
                     & (visible >= p["occlusion_min_visible_fraction"][:, None])
                     & (conf >= p["min_confidence"][:, None]))
-        # measurement (world frame, via the localization estimate)
+        return Detection(detected=detected, confidence=conf, visible=visible,
+                         eff_range=eff_range)
+
+    def _measure(self, tick: int, view: SensorView, det: Detection, gt: ObstacleFrame,
+                 ego_yaw: np.ndarray, loc: LocalizationOutput, lc: np.ndarray, ls: np.ndarray
+                 ) -> Measurement:
+        """The detector's noisy boxes, placed in the world through the localization estimate
+        (``lc``, ``ls``: (N, 1) cosine and sine of its heading); orientation modulo pi."""
+        p = self.p
+        w = self.world
+        n, m = gt.x.shape
         noise = rng.normal(w.seeds, tick, _STREAM_DET, (m, 5)) if m else np.zeros((n, 0, 5))
         std = p["position_noise_std_m"][:, None] * (
-            1.0 + p["noise_range_gain"][:, None] * dist / eff_range) * self._weather()["blur"]
-        mrx = rx + std * noise[..., 0]
-        mry = ry + std * noise[..., 1]
-        lc, ls = np.cos(loc.heading)[:, None], np.sin(loc.heading)[:, None]
+            1.0 + p["noise_range_gain"][:, None] * view.dist / det.eff_range) \
+            * self._weather()["blur"]
+        mrx = view.rx + std * noise[..., 0]
+        mry = view.ry + std * noise[..., 1]
         mx = loc.x[:, None] + mrx * lc - mry * ls
         my = loc.y[:, None] + mrx * ls + mry * lc
         # the detector sees box orientation modulo pi, in the world via localization
@@ -266,7 +337,14 @@ class Perception:
         box_yaw = wrap_angle(2.0 * box_yaw) / 2.0  # in [-pi/2, pi/2)
         mlen = np.maximum(gt.length + p["size_noise_std_m"][:, None] * noise[..., 3], 0.1)
         mwid = np.maximum(gt.width + p["size_noise_std_m"][:, None] * noise[..., 4], 0.1)
-        # tracking
+        return Measurement(x=mx, y=my, yaw=box_yaw, length=mlen, width=mwid)
+
+    def _track(self, detected: np.ndarray, meas: Measurement) -> np.ndarray:
+        """Update the tracks with the detections (associated within the gate, else a new
+        track; undetected tracks coast until they have missed too many frames); returns
+        (N, M) bool, the slots that started a new track."""
+        p = self.p
+        mx, my = meas.x, meas.y
         dt = self.period
         alive = self.track_id >= 0
         pred_x = self.tx + self.tvx * dt
@@ -296,39 +374,33 @@ class Perception:
         self.age = np.where(new, 0.0, np.where(alive | new, self.age + dt, 0.0))
         dead = self.missed > p["track_max_missed_frames"][:, None]
         self.track_id = np.where(dead, -1, self.track_id)
-        # heading: resolve the pi ambiguity with the velocity when fast, else with the track
+        return new
+
+    def _resolve_heading(self, detected: np.ndarray, new: np.ndarray, box_yaw: np.ndarray
+                         ) -> None:
+        """Set the detected tracks' headings: the box's orientation with its pi ambiguity
+        resolved by the velocity when fast, else by the track's heading so far."""
         speed = np.hypot(self.tvx, self.tvy)
-        ref_dir = np.where(speed > p["heading_from_velocity_speed_mps"][:, None],
+        ref_dir = np.where(speed > self.p["heading_from_velocity_speed_mps"][:, None],
                            numerics.arctan2(self.tvy, self.tvx), self.theading)
         flip = np.abs(wrap_angle(box_yaw - ref_dir)) > np.pi / 2
         resolved = wrap_angle(box_yaw + np.where(flip, np.pi, 0.0))
         first = new & (self.hits == 1)
         self.theading = np.where(detected, np.where(first, box_yaw, resolved), self.theading)
-        published = (self.track_id >= 0) & (self.hits >= p["track_min_hits"][:, None])
-        # classification and colour
+
+    def _classify(self, conf: np.ndarray, dist: np.ndarray, slots: dict[str, np.ndarray],
+                  gt: ObstacleFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(N, M) type, sub-type and colour code (-1: too far to tell) of each slot; movable
+        obstacles seen with too little confidence are of unknown type."""
+        p = self.p
         unsure = conf < p["classify_min_confidence"][:, None]
         unknown = slots["movable"] & unsure
-        typ = np.where(static_obj, T_UNKNOWN_UNMOVABLE, np.where(
+        typ = np.where(slots["static_obj"], T_UNKNOWN_UNMOVABLE, np.where(
             unknown, T_UNKNOWN_MOVABLE, slots["type_known"]))
         sub = np.where(slots["is_cone"], ST_CONE, np.where(
             slots["is_box"], ST_BOX, np.where(unknown, ST_UNKNOWN, slots["sub_known"])))
         color = np.where(dist <= p["color_max_distance_m"][:, None], gt.color, -1)
-        # publish in the ego frame of the localization estimate
-        ddx, ddy = self.tx - loc.x[:, None], self.ty - loc.y[:, None]
-        out_x = ddx * lc + ddy * ls
-        out_y = -ddx * ls + ddy * lc
-        brake_prob, brake = self._brake(bearing, dist, gt, visible * detected, glare)
-        tl = self._lights(ego_x, ego_y, ego_yaw, light_colors, factor)
-        return PerceptionOutput(
-            published=published, track_id=self.track_id.copy(), type=typ, sub_type=sub,
-            color=color, x=out_x, y=out_y, theta=wrap_angle(self.theading - loc.heading[:, None]),
-            vx=self.tvx * lc + self.tvy * ls, vy=-self.tvx * ls + self.tvy * lc,
-            ax=self.tax * lc + self.tay * ls, ay=-self.tax * ls + self.tay * lc,
-            length=mlen, width=mwid, height=gt.height, confidence=conf, tracking_time=self.age,
-            ego_x=loc.x, ego_y=loc.y, ego_heading=loc.heading,
-            brake_probability=brake_prob, brake_threshold=p["brake_threshold"], brake=brake,
-            **tl,
-        )
+        return typ, sub, color
 
     def _brake(self, bearing: np.ndarray, dist: np.ndarray, gt: ObstacleFrame,
                visible: np.ndarray, glare: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -375,6 +447,16 @@ class Perception:
                 "tl_confidence": np.where(detected, np.broadcast_to(vis[:, None], dist.shape),
                                           0.0),
                 "tl_distance": np.hypot(sx, sy), "tl_selected": selected}
+
+
+def _sensor_view(ego_x: np.ndarray, ego_y: np.ndarray, ego_yaw: np.ndarray, gt: ObstacleFrame
+                 ) -> SensorView:
+    """The obstacles' ground truth (N, M) seen from the true ego pose (N,)."""
+    ce, se = np.cos(ego_yaw)[:, None], np.sin(ego_yaw)[:, None]
+    dxw, dyw = gt.x - ego_x[:, None], gt.y - ego_y[:, None]
+    rx = dxw * ce + dyw * se
+    ry = -dxw * se + dyw * ce
+    return SensorView(rx=rx, ry=ry, dist=np.hypot(rx, ry), bearing=numerics.arctan2(ry, rx))
 
 
 def sim_light_to_tl(colors: np.ndarray) -> np.ndarray:
