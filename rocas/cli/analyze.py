@@ -86,6 +86,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "'stack' must be the recording's; results cached in RUN_DIR/external)")
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
+    p.add_argument("--replace", action="store_true",
+                   help="start afresh: remove the analysis RUN_DIR holds first (only a rocas "
+                        "run directory is removed)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", "-q", action="store_true",
                    help="no progress bars and no early 'found' line on stderr: only the result")
@@ -127,6 +130,13 @@ def run(args: argparse.Namespace, env: Env) -> int:
     out = Path(args.out) if args.out else Path("runs") / safe_component(name)
     if args.out:
         check_parent_exists(out)  # the run directory is made; a mistyped folder above it is not
+    if args.replace:
+        if args.resume:
+            from rocas.errors import UsageError
+
+            raise UsageError("--replace and --resume contradict each other",
+                             "--resume continues the analysis, --replace starts it afresh")
+        remove_run_dir(out)
     if args.rrd:
         check_writable(args.rrd)  # before minutes of work, not after
     progress: Any = (_Quiet() if args.quiet else
@@ -155,6 +165,32 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if args.rrd:
             env.out().print(f"Rerun recording: {safe(args.rrd)}")
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+
+
+def remove_run_dir(out: Path) -> None:
+    """``--replace``: remove the run directory ``out`` (holding its lock, so an analysis still
+    writing it is not pulled from under it). Nothing happens when it does not exist.
+
+    Raises:
+        UsageError: ``out`` is not a rocas run directory (no state.json, and not empty), or
+            another process is writing it.
+    """
+    import shutil
+
+    from rocas._fs import is_temporary
+    from rocas._lock import locked_directory
+    from rocas.errors import UsageError
+
+    if out.is_symlink():
+        raise UsageError(f"{out} is a symbolic link: --replace removes only a run directory "
+                         "itself", "give the directory it points to as --out")
+    if not out.is_dir():
+        return  # nothing to replace (a file of that name is refused as before)
+    if not (out / "state.json").is_file() and any(not is_temporary(p) for p in out.iterdir()):
+        raise UsageError(f"{out} is not a rocas run directory: --replace removes only those",
+                         "choose another --out")
+    with locked_directory(out):
+        shutil.rmtree(out)
 
 
 def _use_stack_file(path: str, source: Any, out: Path) -> dict[str, str | None]:
