@@ -67,6 +67,14 @@ def test_the_page_shows_the_groups_and_opens_an_accident_in_rerun(browser, serve
     rows = [[td.text for td in tr.find_elements(By.TAG_NAME, "td")]
             for tr in browser.find_elements(By.CSS_SELECTOR, "#groups tbody tr")]
     assert [r[:3] for r in rows] == [[g["id"], g["root_cause"], str(g["count"])] for g in campaign["groups"]]
+    # the terminal's "documented root cause" column, and what "agreement" means
+    headers = [th.text for th in browser.find_elements(By.CSS_SELECTOR, "#groups thead th")]
+    assert headers[-1] == "documented root cause" and len(headers) == len(rows[0])
+    assert [r[-1] for r in rows] == [{True: "yes", False: "no"}.get(g.get("documented"), "")
+                                     for g in campaign["groups"]]
+    legend = browser.find_element(By.ID, "legend").text
+    for word in ("agreement", "stable", "contested", "unstable", "documented root cause"):
+        assert word in legend
     assert "failed: broken" in browser.find_element(By.ID, "failed").text
     assert _errors(browser) == []
 
