@@ -180,7 +180,7 @@ def _answer_fields(report: dict[str, Any]) -> list[tuple[str, str, Any]]:
     ss = report["search_space"] or {}
     searched = (f"{ss['parameters_searched']} of {ss['parameters_total']} parameters"
                 if ss.get("parameters_searched") else "")
-    robust = ((report["validation"] or {}).get("robust_fix") or {}).get("fix")
+    robust = (report["validation"] or {}).get("robust_fix")  # its value and its success rate
     rows: list[tuple[str, str, Any]] = [
         ("verdict", report["verdict"].replace("_", " "), report["verdict"]),
         ("stack", report["stack"] or "", report["stack"]),
