@@ -88,3 +88,13 @@ def test_quiet_triage_writes_only_the_result(rocas, tmp_path):
     assert loud.code == quiet.code == 0, loud.stderr
     assert "triage" in loud.stderr and quiet.stderr == ""
     assert "failed: broken" in quiet.stdout
+
+
+def test_diff_json_carries_no_float_noise(rocas, tmp_path):
+    from foreign_stack import make_pair
+
+    pair = make_pair(tmp_path, deviating="forecaster")
+    res = rocas("diff", pair.accident, pair.reference, "--json")
+    assert res.code == 0, res.stderr
+    assert json.loads(res.stdout)["deviating_module"] == "forecaster"
+    assert _noisy_floats(res.stdout) == []
