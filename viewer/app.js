@@ -22,6 +22,11 @@ function agreement(a) {
   return c ? `${c.level} (${c.same}/${c.runs})` : "n/a";
 }
 
+// the terminal's "documented root cause" column: yes, no, or empty without a documented type
+function documented(d) {
+  return d === true ? "yes" : d === false ? "no" : "";
+}
+
 function selectAccident(name) {
   for (const tr of document.querySelectorAll("#accidents tr.accident-row")) {
     tr.classList.toggle("selected", tr.dataset.name === name);
@@ -52,7 +57,8 @@ function render(c) {
     const tr = document.createElement("tr");
     tr.className = "group-row";
     tr.dataset.group = g.id;
-    [g.id, g.root_cause, String(g.count), counts(g.agreement), counts(g.types)].forEach((t) => cell(tr, t));
+    [g.id, g.root_cause, String(g.count), counts(g.agreement), counts(g.types),
+      documented(g.documented)].forEach((t) => cell(tr, t));
     tr.addEventListener("click", () => showGroup(g.id));
     groups.appendChild(tr);
   }

@@ -26,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import write_text_atomic
+from rocas._json import dumps as json_dumps
+from rocas._json import rounded
 from rocas._lock import locked_directory
 from rocas._text import markdown_text
 from rocas.campaign.grouping import documented_keys, group_accidents, root_cause_keys, scores
@@ -91,8 +93,8 @@ def _triage(inputs: Sequence[CampaignInput], out: Path, cfg: AnalyzeConfig,
     finally:
         if own:
             ex.close()
-    campaign = build_campaign(rows, settings)
-    write_text_atomic(out / "campaign.json", json.dumps(campaign, indent=2) + "\n")
+    campaign = rounded(build_campaign(rows, settings))  # what campaign.json holds, read back alike
+    write_text_atomic(out / "campaign.json", json_dumps(campaign, indent=2) + "\n")
     write_text_atomic(out / "campaign.md", markdown(campaign))
     return campaign
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from rocas._fs import check_parent_exists, check_writable, safe_component
+from rocas._json import dumps as json_dumps
 from rocas.cli.console import Env, safe
 from rocas.cli.exit_codes import ExitStatus
 
@@ -86,7 +87,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "'stack' must be the recording's; results cached in RUN_DIR/external)")
     p.add_argument("--delta", type=float, default=3.0, metavar="S", help="Algorithm 1 window (default 3)")
     p.add_argument("--resume", action="store_true", help="continue the analysis in RUN_DIR")
+    p.add_argument("--replace", action="store_true",
+                   help="start afresh: remove the analysis RUN_DIR holds first (only a rocas "
+                        "run directory is removed)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress bars and no early 'found' line on stderr: only the result")
     p.add_argument("--rrd", metavar="OUT.rrd", help="write a Rerun recording of every phase")
 
 
@@ -125,9 +131,17 @@ def run(args: argparse.Namespace, env: Env) -> int:
     out = Path(args.out) if args.out else Path("runs") / safe_component(name)
     if args.out:
         check_parent_exists(out)  # the run directory is made; a mistyped folder above it is not
+    if args.replace:
+        if args.resume:
+            from rocas.errors import UsageError
+
+            raise UsageError("--replace and --resume contradict each other",
+                             "--resume continues the analysis, --replace starts it afresh")
+        remove_run_dir(out)
     if args.rrd:
         check_writable(args.rrd)  # before minutes of work, not after
-    progress = _Progress(env, {"validation": validation_simulations(cfg.validation_variants)})
+    progress: Any = (_Quiet() if args.quiet else
+                     _Progress(env, {"validation": validation_simulations(cfg.validation_variants)}))
     executor = executor_from_arguments(args)
     if args.stack_file:
         cfg = dataclasses.replace(cfg, stack=_use_stack_file(args.stack_file, source, out))
@@ -135,6 +149,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress,
                              executor=executor)
+            progress.settle(report["evaluations"])
         if args.rrd:
             _write_rrd(args.rrd, out, report)
     except KeyboardInterrupt as exc:
@@ -144,12 +159,38 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if executor is not None:
             executor.close()
     if args.json:
-        env.stdout.write(json.dumps(report, indent=2) + "\n")
+        env.stdout.write(json_dumps(report, indent=2) + "\n")
     else:
         render(report, out, env)
         if args.rrd:
             env.out().print(f"Rerun recording: {safe(args.rrd)}")
     return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+
+
+def remove_run_dir(out: Path) -> None:
+    """``--replace``: remove the run directory ``out`` (holding its lock, so an analysis still
+    writing it is not pulled from under it). Nothing happens when it does not exist.
+
+    Raises:
+        UsageError: ``out`` is not a rocas run directory (no state.json, and not empty), or
+            another process is writing it.
+    """
+    import shutil
+
+    from rocas._fs import is_temporary
+    from rocas._lock import locked_directory
+    from rocas.errors import UsageError
+
+    if out.is_symlink():
+        raise UsageError(f"{out} is a symbolic link: --replace removes only a run directory "
+                         "itself", "give the directory it points to as --out")
+    if not out.is_dir():
+        return  # nothing to replace (a file of that name is refused as before)
+    if not (out / "state.json").is_file() and any(not is_temporary(p) for p in out.iterdir()):
+        raise UsageError(f"{out} is not a rocas run directory: --replace removes only those",
+                         "choose another --out")
+    with locked_directory(out):
+        shutil.rmtree(out)
 
 
 def _use_stack_file(path: str, source: Any, out: Path) -> str:
@@ -219,6 +260,22 @@ def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
                             delta_s=(report.get("settings") or {}).get("delta_s", 3.0)), path)
 
 
+class _Quiet:
+    """``--quiet``: the progress callback that shows nothing."""
+
+    def __enter__(self) -> _Quiet:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+    def __call__(self, phase: str, info: dict[str, Any]) -> None:
+        return None
+
+    def settle(self, evaluations: dict[str, int]) -> None:
+        return None
+
+
 class _Progress:
     """A rich progress bar per phase on stderr. A phase is finished (its bar filled, its clock
     stopped, its count shown as simulations run) when the next one starts or the run ends."""
@@ -251,6 +308,30 @@ class _Progress:
             self._p.update(task, total=max(n or 1, 1), completed=max(n or 1, 1),
                            count=f"{n} sims" if n else "done")
             self._p.stop_task(task)
+
+    def settle(self, evaluations: dict[str, int]) -> None:
+        """End every bar on the count the report's "simulations" line gives for its phase.
+
+        The bars count as the phases report; the report counts what each phase simulated in
+        all, which for the cyber phase includes the shrinking of its fixes (the minimise bar's
+        simulations) and for a resumed run the work done before the interruption."""
+        search = self._done.get("cyber")
+        for phase, n in evaluations.items():
+            task = self._tasks.get(phase)
+            if task is None:
+                continue
+            self._done[phase] = n
+            info = self._p.tasks[task].fields.get("info", "")
+            if phase == "cyber" and search is not None and n > search and "minimise" in self._tasks:
+                info = f"{info}; search {search} + minimise {n - search}".lstrip("; ")
+            self._p.update(task, total=max(n, 1), completed=max(n, 1), count=f"{n} sims",
+                           info=info)
+            self._p.stop_task(task)
+        if "minimise" in self._tasks and "cyber" in evaluations and search is not None:
+            task = self._tasks["minimise"]
+            extra = evaluations["cyber"] - search
+            if extra > 0:
+                self._p.update(task, count=f"{extra} sims")
 
     def __call__(self, phase: str, info: dict[str, Any]) -> None:
         if phase == "answer":  # the answer before phase V checks it: said at once, above the bars

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
+from rocas._json import dumps as json_dumps
 from rocas.catalog import shipped_recordings
 from rocas.cli.analyze import add_search_arguments
 from rocas.cli.console import Env, safe
@@ -65,7 +65,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
                     "the same command resumes them")
         raise
     if args.json:
-        env.stdout.write(json.dumps(res, indent=2) + "\n")
+        env.stdout.write(json_dumps(res, indent=2) + "\n")
     elif args.seeds:
         for seed, one in zip(args.seeds, res["runs"], strict=True):
             env.out().print(f"[bold]Seed {seed}[/bold]")

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 from collections.abc import Mapping
 
 from rich.table import Table
 
+from rocas._json import dumps as json_dumps
 from rocas.analysis.cmg import (
     ChannelModuleGraph,
     ChannelTopology,
@@ -269,7 +269,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     spec = load_cmg_file(args.cmg) if args.cmg else None
     view = build_view(args.recording, spec, args.control_channel, env)
     if args.format == "json":
-        env.stdout.write(json.dumps(to_json(view), indent=2) + "\n")
+        env.stdout.write(json_dumps(to_json(view), indent=2) + "\n")
     elif args.format == "dot":
         env.stdout.write(view.graph.to_dot())
     else:

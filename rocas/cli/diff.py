@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import TYPE_CHECKING
 
 from rocas._fs import check_writable
+from rocas._json import dumps as json_dumps
 from rocas.cli.console import Env, printable, prose, safe
 
 if TYPE_CHECKING:
@@ -185,7 +185,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
         write_diff_rrd(result, args.rrd)
     if args.json:
-        env.stdout.write(json.dumps(result.to_json(), indent=2) + "\n")
+        env.stdout.write(json_dumps(result.to_json(), indent=2) + "\n")
     else:
         render(result, env)
         if args.rrd:

@@ -41,6 +41,7 @@ COMMANDS: dict[str, str] = {
     "catalog": "catalog",
     "bench": "bench",
     "triage": "triage",
+    "compare": "compare",
 }
 
 

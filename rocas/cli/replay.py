@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from rocas._fs import check_writable
+from rocas._json import dumps as json_dumps
 from rocas.cli.console import Env, printable
 from rocas.errors import NotReproducedError, UsageError
 
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     for line in rec.warnings:  # damage: in JSON mode too (and in the JSON's "warnings")
         env.warn(line)
     if args.json:
-        print(json.dumps(report.to_dict(), indent=2), file=env.stdout)
+        print(json_dumps(report.to_dict(), indent=2), file=env.stdout)
     else:
         out = env.stdout
         print(printable(f"{rec.scenario.name}: {len(rec.scenario.actors)} actors rebuilt from "

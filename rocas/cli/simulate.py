@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 
 from rocas._fs import check_writable
+from rocas._json import dumps as json_dumps
 from rocas.cli.console import Env, printable
 from rocas.errors import UsageError
 
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
                    else scenario.seed, "overrides": overrides, **dataclasses.asdict(out)}
         if payload["min_separation_m"] == float("inf"):
             payload["min_separation_m"] = None
-        print(json.dumps(payload, indent=2), file=env.stdout)
+        print(json_dumps(payload, indent=2), file=env.stdout)
     else:
         print(printable(f"{scenario.name}: {out.summary()} -> {result.recording} "
                         f"({result.messages} messages)"), file=env.stdout)

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
 from rocas._fs import check_parent_exists
+from rocas._json import dumps as json_dumps
 from rocas.cli.analyze import add_executor_arguments, add_search_arguments
 from rocas.cli.console import Env, safe
 from rocas.cli.exit_codes import ExitStatus
@@ -34,6 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_executor_arguments(p)
     p.add_argument("--resume", action="store_true", help="continue the campaign in --out")
     p.add_argument("--json", action="store_true", help="print campaign.json instead of the tables")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress bar on stderr: only the result")
 
 
 def run(args: argparse.Namespace, env: Env) -> int:
@@ -56,16 +58,29 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
         executor = RayExecutor(args.workers, address=args.address)
     try:
-        with _CampaignBar(env, len(inputs)) as bar:
+        with (_QuietBar() if args.quiet else _CampaignBar(env, len(inputs))) as bar:
             campaign = triage(inputs, out, cfg, resume=args.resume, progress=bar, executor=executor)
     finally:
         if executor is not None:
             executor.close()
     if args.json:
-        env.stdout.write(json.dumps(campaign, indent=2) + "\n")
+        env.stdout.write(json_dumps(campaign, indent=2) + "\n")
     else:
         render(campaign, out, env)
     return ExitStatus.SUCCESS
+
+
+class _QuietBar:
+    """``--quiet``: the campaign's progress callback that shows nothing."""
+
+    def __enter__(self) -> _QuietBar:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+    def __call__(self, k: int, n: int, name: str, phase: str, info: dict[str, Any]) -> None:
+        return None
 
 
 class _CampaignBar:

@@ -1,4 +1,4 @@
-"""``rocas view RUN_DIR | RECORDING.mcap``: the Rerun visual debugger.
+"""``rocas view RUN_DIR | RECORDING.mcap | FILE.rrd``: the Rerun visual debugger.
 
 Opens the native viewer when a display is available (it is given a file it may read whenever
 it likes: rocas never removes it under the viewer, and says whether the viewer started or
@@ -28,9 +28,9 @@ HELP = "open a recording or an analysis run directory in the Rerun viewer"
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "source",
-        metavar="RUN_DIR|RECORDING.mcap",
-        help="a directory written by 'rocas analyze', or one recording (MCAP, ROS 1 bag, "
-             "rosbag2, Cyber RT record)",
+        metavar="RUN_DIR|RECORDING|FILE.rrd",
+        help="a directory written by 'rocas analyze', one recording (MCAP, ROS 1 bag, "
+             "rosbag2, Cyber RT record), or a Rerun recording (.rrd) as it is",
     )
     p.add_argument("--rrd", metavar="OUT.rrd", help="write the Rerun recording to this file")
     p.add_argument("--web", action="store_true", help="serve the web viewer instead of the native one")
@@ -94,6 +94,8 @@ def run(args: argparse.Namespace, env: Env) -> int:
     keep = Path(args.rrd) if args.rrd else None
     if keep is not None:
         check_writable(keep)
+    if is_rrd_file(source):
+        return _view_rrd(source, keep, args, env)
     native = not args.no_viewer and not args.web and has_display()
     tmpdir = None
     if keep is not None:
@@ -131,6 +133,57 @@ def run(args: argparse.Namespace, env: Env) -> int:
     finally:
         if tmpdir is not None:
             tmpdir.cleanup()
+
+
+#: the first bytes of every Rerun recording file (an .rrd or a blueprint .rbl)
+RRD_MAGIC = b"RRF2"
+
+
+def is_rrd_file(source: Path) -> bool:
+    """Whether ``source`` is a file that is a Rerun recording: named ``.rrd`` (or ``.rbl``).
+
+    Raises:
+        InputError: it is named so but does not start as one (a file renamed, a download cut).
+    """
+    if not source.is_file() or source.suffix.lower() not in (".rrd", ".rbl"):
+        return False
+    try:
+        with open(source, "rb") as f:
+            head = f.read(len(RRD_MAGIC))
+    except OSError as exc:
+        raise InputError(f"cannot read {source}: {exc.strerror or exc}", "check the path") from None
+    if head != RRD_MAGIC:
+        raise InputError(f"{source}: not a Rerun recording (it does not start as an .rrd does)",
+                         "give an .rrd written by rocas or Rerun")
+    return True
+
+
+def _view_rrd(source: Path, keep: Path | None, args: argparse.Namespace, env: Env) -> int:
+    """An existing ``.rrd``: shown as it is (its own layout), natively or in the browser;
+    ``--rrd`` copies it."""
+    import shutil
+
+    from rocas._fs import atomic_path
+    from rocas.viz.serve import bind_warning
+
+    if keep is not None:
+        with atomic_path(keep) as tmp:
+            shutil.copyfile(source, tmp)
+        env.out().print(f"Rerun recording: {safe(keep)} (a copy of {safe(source)})", soft_wrap=True)
+    if args.no_viewer:
+        return 0
+    if args.web or not has_display():
+        warning = bind_warning(args.bind)
+        if warning:
+            env.warn(warning)
+        return _serve_web(source.resolve(), args, env)
+    pid, running = _spawn_native(source.resolve(), args)
+    if running:
+        env.out().print(f"Started the Rerun viewer (process {pid}).", soft_wrap=True)
+    else:
+        env.out().print(f"The Rerun viewer (process {pid}) took the file and exited at once with "
+                        "status 0 (a viewer already open may show it).", soft_wrap=True)
+    return 0
 
 
 #: How long a viewer that fails at once (no GPU, a broken install) is waited for [s]; a viewer
@@ -214,10 +267,10 @@ def _serve_campaign(campaign_dir: Path, args: argparse.Namespace, env: Env) -> i
 
 def _serve_until_interrupt(env: Env, where: str, stop: Callable[[], object]) -> int:
     """Say where the page is, then wait for Ctrl-C and ``stop`` the server (exit 0)."""
-    env.out().print(safe(where), soft_wrap=True)
-    env.out().print("Serving until Ctrl-C.")
-    env.stdout.flush()
-    try:
+    try:  # Ctrl-C as soon as the address is out (a script that read it) stops as cleanly
+        env.out().print(safe(where), soft_wrap=True)
+        env.out().print("Serving until Ctrl-C.")
+        env.stdout.flush()
         while True:
             time.sleep(1.0)
     except KeyboardInterrupt:

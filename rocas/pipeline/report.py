@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 from rocas._fs import write_text_atomic
+from rocas._json import dumps as json_dumps
+from rocas._json import rounded
 from rocas._text import markdown_text
 
 EXPLANATIONS = {
@@ -369,6 +370,7 @@ def markdown(report: dict[str, Any]) -> str:
 
 
 def write_report(out: Path, report: dict[str, Any]) -> dict[str, Any]:
-    write_text_atomic(out / "report.json", json.dumps(report, indent=2))
+    report = rounded(report)  # what report.json holds is what the caller gets (rocas._json)
+    write_text_atomic(out / "report.json", json_dumps(report, indent=2))
     write_text_atomic(out / "report.md", markdown(report))
     return report

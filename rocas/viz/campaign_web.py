@@ -7,7 +7,8 @@ all from one origin:
   (:func:`viewer_dir`);
 - ``/campaign.json``: the campaign's groups and accidents (``rocas triage``'s file);
 - ``/rrd/<accident>.rrd``: the accident's analysis as a Rerun recording, written on its first
-  request into ``CAMPAIGN_DIR/rrd/`` (:func:`rocas.viz.analysis.write_run_dir_rrd`) and kept;
+  request into ``CAMPAIGN_DIR/rrd/`` (:func:`rocas.viz.analysis.write_run_dir_rrd`) and kept
+  (written again when an earlier rocas wrote it with another layout: :data:`RRD_LAYOUT`);
 - ``/rerun/...``: Rerun's web viewer, the one rerun-sdk ships (so always the version of the
   installed rerun-sdk, 0.41), passed through from a ``rerun --serve-web`` process on
   127.0.0.1 (:class:`rocas.viz.serve.RerunWebServer`); its page's links to web fonts are left
@@ -187,8 +188,9 @@ class CampaignServer:
         try:
             run_dir = inside(self.campaign_dir, "runs", name)
             out = inside(self.campaign_dir, "rrd", f"{name}.rrd")
+            stamp = inside(self.campaign_dir, "rrd", f"{name}.rrd.layout")
             with self._lock:
-                if not out.exists():
+                if not out.exists() or not _stamped(stamp):
                     from rocas.viz.analysis import write_run_dir_rrd
 
                     if not run_dir.is_dir():
@@ -197,6 +199,7 @@ class CampaignServer:
                     out.parent.mkdir(exist_ok=True)
                     inside(self.campaign_dir, "rrd")  # rrd/ itself is no link out
                     write_run_dir_rrd(out, run_dir)
+                    stamp.write_text(RRD_LAYOUT + "\n", encoding="utf-8")
                 body = out.read_bytes()
         except RocasError as exc:
             return _send(h, str(exc).encode(), "text/plain", HTTPStatus.NOT_FOUND)
@@ -220,6 +223,19 @@ class CampaignServer:
         if rest.split("?", 1)[0] in ("/", "/index.html"):
             body = _WEB_FONTS.sub(b"", body)
         _send(h, body, ctype, extra=extra)
+
+
+#: what the layout of a cached ``rrd/<accident>.rrd`` is, written beside it (``.rrd.layout``);
+#: a file without it, or with another, was written by an earlier rocas (whose blueprint Rerun's
+#: web viewer ignored) and is written again. Change it when the .rrd's layout changes.
+RRD_LAYOUT = "rocas analysis layout 2: blueprint default and active"
+
+
+def _stamped(stamp: Path) -> bool:
+    try:
+        return stamp.read_text(encoding="utf-8").strip() == RRD_LAYOUT
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def _send(h: BaseHTTPRequestHandler, body: bytes, ctype: str, status: HTTPStatus = HTTPStatus.OK,

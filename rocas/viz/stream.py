@@ -36,9 +36,12 @@ def rrd_recording(
     """Yield a ``rerun.RecordingStream``; when the block ends without error, save it to ``path``.
 
     ``kind`` names what the file holds (``diff``, ``analysis``, ``view``) in the id;
-    ``blueprint`` becomes the file's default layout. The stream is kept in memory (the
-    ``.rrd``'s size: a few MB for an analysis) and written under a temporary name that is
-    renamed on success; nothing is written when the block raises.
+    ``blueprint`` becomes the file's default layout and its active one: the native viewer
+    shows a default layout, but Rerun's web viewer falls back to its automatic layout unless
+    the blueprint is also made active (``tests/viewer/test_blueprint.py`` checks both views).
+    The stream is kept in memory (the ``.rrd``'s size: a few MB for an analysis) and written
+    under a temporary name that is renamed on success; nothing is written when the block
+    raises.
 
     Raises:
         OutputError: the file cannot be written (a full disk, a folder not writable).
@@ -48,7 +51,7 @@ def rrd_recording(
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=new_recording_id(kind))
     stream = rr.binary_stream(recording=rec)
     if blueprint is not None:
-        rec.send_blueprint(blueprint, make_active=False, make_default=True)
+        rec.send_blueprint(blueprint, make_active=True, make_default=True)
     try:
         yield rec
         data = stream.read(flush=True) or b""

@@ -2,9 +2,7 @@
 loads with no console error, its groups table is campaign.json's, and Rerun's web viewer
 shows its canvas for a selected accident."""
 
-import shutil
 import socket
-import tempfile
 
 import pytest
 
@@ -15,29 +13,6 @@ def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def browser():
-    webdriver = pytest.importorskip("selenium.webdriver")
-    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver_path = shutil.which("chromedriver")
-    if not chromium or not driver_path:
-        pytest.skip("chromium and chromedriver are not installed (apt-get install chromium "
-                    "chromium-driver; .ci/run does)")
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = chromium
-    profile = tempfile.mkdtemp(prefix="rocas-chromium-")
-    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--enable-unsafe-swiftshader", "--window-size=1400,900",
-                 f"--user-data-dir={profile}"):
-        opts.add_argument(flag)
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(options=opts, service=webdriver.ChromeService(executable_path=driver_path))
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
 
 
 @pytest.fixture(scope="module")
@@ -92,6 +67,14 @@ def test_the_page_shows_the_groups_and_opens_an_accident_in_rerun(browser, serve
     rows = [[td.text for td in tr.find_elements(By.TAG_NAME, "td")]
             for tr in browser.find_elements(By.CSS_SELECTOR, "#groups tbody tr")]
     assert [r[:3] for r in rows] == [[g["id"], g["root_cause"], str(g["count"])] for g in campaign["groups"]]
+    # the terminal's "documented root cause" column, and what "agreement" means
+    headers = [th.text for th in browser.find_elements(By.CSS_SELECTOR, "#groups thead th")]
+    assert headers[-1] == "documented root cause" and len(headers) == len(rows[0])
+    assert [r[-1] for r in rows] == [{True: "yes", False: "no"}.get(g.get("documented"), "")
+                                     for g in campaign["groups"]]
+    legend = browser.find_element(By.ID, "legend").text
+    for word in ("agreement", "stable", "contested", "unstable", "documented root cause"):
+        assert word in legend
     assert "failed: broken" in browser.find_element(By.ID, "failed").text
     assert _errors(browser) == []
 

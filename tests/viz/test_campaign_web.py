@@ -106,3 +106,24 @@ def test_a_page_port_in_use_is_one_line(hostile_campaign):
             srv.start()
         assert "--page-port" in e.value.hint
     srv.stop()
+
+
+def test_an_rrd_an_earlier_rocas_cached_is_written_again(small_campaign):
+    from rocas.viz.campaign_web import RRD_LAYOUT
+
+    out, campaign = small_campaign
+    name = campaign["accidents"][0]["name"]
+    cached = out / "rrd" / f"{name}.rrd"
+    cached.parent.mkdir(exist_ok=True)
+    cached.write_bytes(b"RRF2 written by an earlier rocas, its blueprint not active")
+    (out / "rrd" / f"{name}.rrd.layout").unlink(missing_ok=True)
+    srv = CampaignServer(out, port=0, web_viewer_port=0)
+    srv.start()
+    try:
+        status, body = _get(srv, f"/rrd/{name}.rrd")
+        assert status == 200 and body.startswith(b"RRF2") and b"earlier rocas" not in body
+        assert (out / "rrd" / f"{name}.rrd.layout").read_text().strip() == RRD_LAYOUT
+        again_status, again = _get(srv, f"/rrd/{name}.rrd")  # now kept as it is
+        assert again_status == 200 and again == body
+    finally:
+        srv.stop()

@@ -1,0 +1,94 @@
+"""``rocas view FILE.rrd``: any Rerun recording, natively or served to the browser (issue 40)."""
+
+import signal
+import sys
+
+import pytest
+
+
+class _FakeViewer:
+    """(as in test_view.py) Stands in for ``subprocess.Popen`` of the ``rerun`` executable."""
+
+    def __init__(self, exit_code=None, stderr=b""):
+        self.exit_code, self.stderr_bytes, self.argv = exit_code, stderr, None
+
+    def __call__(self, argv, **kwargs):
+        import io
+        import subprocess
+
+        self.argv = argv
+        fake = self
+
+        class Proc:
+            pid = 4242
+            stderr = io.BytesIO(fake.stderr_bytes)
+
+            def wait(self, timeout=None):
+                if fake.exit_code is None:
+                    raise subprocess.TimeoutExpired(argv, timeout)
+                return fake.exit_code
+
+        return Proc()
+
+
+def _serve_view(args, env=None):
+    """Start ``rocas view ...`` serving; return the process and its first line of output."""
+    import os
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
+               **(env or {}))
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.Popen([sys.executable, "-m", "rocas", "view", *map(str, args)], cwd=root,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    return proc, line
+
+
+@pytest.fixture(scope="module")
+def rrd(tmp_path_factory, red_truck_recording):
+    import io
+
+    from rocas.cli.console import Env
+    from rocas.cli.main import main
+
+    path = tmp_path_factory.mktemp("rrd") / "made.rrd"
+    err = io.StringIO()
+    assert main(["view", str(red_truck_recording), "--rrd", str(path), "--no-viewer"],
+                env=Env(stdout=io.StringIO(), stderr=err)) == 0, err.getvalue()
+    return path
+
+
+def test_a_native_viewer_is_given_the_file_itself(rocas, rrd, monkeypatch):
+    viewer = _FakeViewer()
+    monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
+    monkeypatch.setattr("subprocess.Popen", viewer)
+    res = rocas("view", rrd)
+    assert res.code == 0, res.stderr
+    assert "Started the Rerun viewer (process 4242)" in res.stdout
+    assert viewer.argv[-1] == str(rrd.resolve())
+
+
+def test_rrd_copies_it_and_a_file_that_is_not_one_is_refused(rocas, rrd, tmp_path):
+    res = rocas("view", rrd, "--rrd", tmp_path / "copy.rrd", "--no-viewer")
+    assert res.code == 0, res.stderr
+    assert (tmp_path / "copy.rrd").read_bytes() == rrd.read_bytes()
+    fake = tmp_path / "fake.rrd"
+    fake.write_bytes(b"PK\x03\x04 a zip file renamed")
+    res = rocas("view", fake, "--no-viewer", "--rrd", tmp_path / "x.rrd")
+    assert res.code == 3 and res.stderr.count("\n") == 1
+    assert "not a Rerun recording" in res.stderr and "ROS" not in res.stderr
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child")
+def test_without_a_display_it_is_served_to_the_browser(rrd):
+    proc, line = _serve_view([rrd, "--web-port", "0", "--grpc-port", "0"])
+    try:
+        assert line.startswith("Rerun web viewer: http://127.0.0.1:"), (line, proc.stderr.read())
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0 and "Traceback" not in err, err
