@@ -299,11 +299,9 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
 
 def _starts(sides: tuple[tuple[Recording, _Head], tuple[Recording, _Head]]
             ) -> tuple[tuple[int | None, int | None], tuple[str, ...]]:
-    """Each file's first log time [ns] (None for a file without a message), and a warning
-    line for a file whose summary lists a start after the first message read.
-
-    The start is the earlier of the summary's start time and the head's earliest message,
-    unless the summary's lies after that message (then the message's)."""
+    """Each file's first log time [ns]: the earlier of its summary's start time and its
+    head's earliest message (None for a file with neither), and a warning line for a file
+    whose summary lists a start after the first message read."""
     warnings: list[str] = []
     starts: list[int | None] = []
     for rec, head in sides:
