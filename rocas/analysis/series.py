@@ -317,11 +317,12 @@ class _Side:
         self.times[topic] = st[3]
         return st
 
-    def next(self) -> tuple[_Streamed | None, int]:
-        """The next message in file order (None at the end) and its aligned log time [ns]."""
+    def next(self, bins: _Bins) -> tuple[_Streamed | None, float, int]:
+        """The next message in file order (None at the end), its bin of ``bins`` (inf at the
+        end) and its aligned log time [ns]."""
         msg = next(self.stream, None)
         if msg is None:
-            return None, 0
+            return None, math.inf, 0
         topic = msg[0].topic
         if self.unflushed and (at := self.unflushed.get(topic)) is not None:
             msg = (msg[0], at(msg[1]), *msg[2:])
@@ -334,7 +335,7 @@ class _Side:
             self.last = t
         if self.last - self.first > self.max_span_ns or abs(t_al - self.origin) > self.max_span_ns:
             self._span_error()
-        return msg, t_al
+        return msg, bins.bin_of(self, t_al), t_al
 
     def _span_error(self) -> None:
         lo, hi = self.first, self.last
@@ -409,14 +410,6 @@ class _Bins:
         self.scored_below = max(self.scored_below, below)
 
 
-def _advance(side: _Side, bins: _Bins) -> tuple[_Streamed | None, float, int]:
-    """The side's next message, its bin (inf at the end) and its aligned time [ns]."""
-    msg, t_al = side.next()
-    if msg is None:
-        return None, math.inf, 0
-    return msg, bins.bin_of(side, t_al), t_al
-
-
 def _read_in_step(sides: tuple[_Side, _Side], bins: _Bins,
                   channels: dict[str, list[ChannelInfo | None]],
                   progress: Callable[[int, int], None] | None) -> None:
@@ -426,7 +419,7 @@ def _read_in_step(sides: tuple[_Side, _Side], bins: _Bins,
     (accident, reference) ChannelInfo, filled as channels appear."""
     total_bytes = sides[0].rec.size + sides[1].rec.size
     open_bins = bins.open
-    (h0, b0, a0), (h1, b1, a1) = _advance(sides[0], bins), _advance(sides[1], bins)
+    (h0, b0, a0), (h1, b1, a1) = sides[0].next(bins), sides[1].next(bins)
     heads: list[_Streamed | None] = [h0, h1]
     head_bins = [b0, b1]
     head_times = [a0, a1]
@@ -452,7 +445,7 @@ def _read_in_step(sides: tuple[_Side, _Side], bins: _Bins,
                 slot = bin_slots[topic] = ([], [])
             slot[side].append((t_al, s.read, ch, payload, decode,
                                UNDECODED if decode is not None else msg[4]))
-        heads[side], head_bins[side], head_times[side] = _advance(s, bins)
+        heads[side], head_bins[side], head_times[side] = s.next(bins)
         since_flush += 1
         if since_flush >= 256:
             since_flush = 0
