@@ -282,9 +282,29 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
     flushed = flushed_channels(head_a, head_b)
     for side, topic, period, flush in flushed:
         _unflush((head_a, head_b)[side].topics[topic], round(period * 1e9), round(flush * 1e9))
+    starts, warnings = _starts(((accident, head_a), (reference, head_b)))
+    sa, sb = starts
+    if sa is None or sb is None:
+        alignment = Alignment("file starts", 0.0, 0, {}, sa or sb or 0, (0.0, 0.0))
+        return alignment, {}, False, warnings, (head_a.resume, head_b.resume)
+    found = _offset(method, head_a, head_b, sa, sb, bin_s)
+    offset = found.offset_ns
+    origin = max(sa, sb + offset)
+    alignment = Alignment(found.how, offset / 1e9, found.matches, found.channel_shifts_s, origin,
+                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9), flushed)
+    rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
+                          list(ignore))
+    return alignment, rules, noisy, warnings, (head_a.resume, head_b.resume)
+
+
+def _starts(sides: tuple[tuple[Recording, _Head], tuple[Recording, _Head]]
+            ) -> tuple[tuple[int | None, int | None], tuple[str, ...]]:
+    """Each file's first log time [ns]: the earlier of its summary's start time and its
+    head's earliest message (None for a file with neither), and a warning line for a file
+    whose summary lists a start after the first message read."""
     warnings: list[str] = []
     starts: list[int | None] = []
-    for rec, head in ((accident, head_a), (reference, head_b)):
+    for rec, head in sides:
         listed = rec.summary_start_time_ns()
         start = head.earliest_ns
         if listed is not None and start is not None and listed > start:
@@ -293,67 +313,84 @@ def align(accident: Recording, reference: Recording, *, method: str = "auto",
         elif listed is not None:
             start = listed if start is None else min(start, listed)
         starts.append(start)
-    if starts[0] is None or starts[1] is None:
-        alignment = Alignment("file starts", 0.0, 0, {}, starts[0] or starts[1] or 0, (0.0, 0.0))
-        return alignment, {}, False, tuple(warnings), (head_a.resume, head_b.resume)
-    sa, sb = starts[0], starts[1]
+    return (starts[0], starts[1]), tuple(warnings)
+
+
+@dataclass(frozen=True)
+class _Offset:
+    """An offset found for the reference (:attr:`Alignment.method`'s ``how``, the offset
+    [ns], the content matches that agree with it, and channels on another clock [s])."""
+
+    how: str
+    offset_ns: int
+    matches: int = 0
+    channel_shifts_s: dict[tuple[int, str], float] = field(default_factory=dict)
+
+
+def _offset(method: str, head_a: _Head, head_b: _Head, sa: int, sb: int, bin_s: float
+            ) -> _Offset:
+    """The offset ``method`` asks for (``sa``, ``sb``: the files' starts [ns])."""
+    if method == "auto":
+        return _auto_offset(head_a, head_b, sa, sb, bin_s)
+    if method == "first":
+        return _Offset("file starts", sa - sb)
+    if method == "log-time":
+        return _Offset("log time", 0)
+    ta, tb = head_a.topics.get(method), head_b.topics.get(method)
+    if ta is None or tb is None:
+        raise UsageError(
+            f"--align {method}: that channel has no message in the first {HEAD_S:g} s of "
+            f"{'either recording' if ta is None and tb is None else 'one recording'}",
+            "name a channel both recordings publish from their start, or use --align auto")
+    return _Offset(f"first message of {method}", ta.first_ns - tb.first_ns)
+
+
+def _auto_offset(head_a: _Head, head_b: _Head, sa: int, sb: int, bin_s: float) -> _Offset:
+    """``--align auto``: by identical messages when enough of them agree on one offset
+    (within half a bin), else by the channels' first messages, refined by the best match of
+    content, else by the files' starts."""
     width = bin_s * 1e9 / 2.0
     by_topic = _content_offsets(head_a, head_b)
-    matches = 0
+    shared = sorted(set(head_a.topics) & set(head_b.topics))
+    # the channels whose payloads the two runs share (repeated ones, which cannot time an
+    # offset) are no noisy channels: the content of the others is compared
+    signals = _topic_signals(head_a, head_b, [
+        t for t in shared if not _shared_payloads(head_a, head_b, [t])])
+    shift = (head_a.earliest_ns or 0) - (head_b.earliest_ns or 0)
+    votes = [v for vs in by_topic.values() for v in vs]
+    agree = _agreeing(votes, width) if votes else []
+    if len(agree) >= MIN_MATCHES and 2 * len(agree) >= len(votes):
+        offset = _median_int(agree)
+        return _Offset("content", offset, len(agree),
+                       _channel_shifts(head_a, head_b, by_topic, offset, width, sa, sb))
+    if not shared:
+        return _Offset("file starts", sa - sb)
+    offset = _median_int([head_a.topics[t].first_ns - head_b.topics[t].first_ns for t in shared])
+    best = (_best_offset(list(signals.values()), offset, shift, bin_s, MATCH_RANGE_S)
+            if signals else None)
+    if best is not None:
+        return _Offset("best match of content", best)
+    return _Offset("first messages", offset)
+
+
+def _channel_shifts(head_a: _Head, head_b: _Head, by_topic: dict[str, list[int]], offset: int,
+                    width: float, sa: int, sb: int) -> dict[tuple[int, str], float]:
+    """(side, topic) -> shift [s] of each channel whose identical messages agree on an offset
+    more than ``width`` [ns] from ``offset``: the channel is on another clock in the file
+    where it starts later after that file's first message (``sa``, ``sb`` [ns])."""
     channel: dict[tuple[int, str], float] = {}
-    if method == "auto":
-        shared = sorted(set(head_a.topics) & set(head_b.topics))
-        # the channels whose payloads the two runs share (repeated ones, which cannot time an
-        # offset) are no noisy channels: the content of the others is compared
-        signals = _topic_signals(head_a, head_b, [
-            t for t in shared if not _shared_payloads(head_a, head_b, [t])])
-        shift = (head_a.earliest_ns or 0) - (head_b.earliest_ns or 0)
-        votes = [v for vs in by_topic.values() for v in vs]
-        agree = _agreeing(votes, width) if votes else []
-        if len(agree) >= MIN_MATCHES and 2 * len(agree) >= len(votes):
-            how, offset, matches = "content", _median_int(agree), len(agree)
-            for topic, vs in sorted(by_topic.items()):
-                own = _agreeing(vs, width)
-                if len(own) >= MIN_CHANNEL_MATCHES and 5 * len(own) >= 4 * len(vs):
-                    o = _median_int(own)
-                    if abs(o - offset) > width:
-                        # which file's channel is on another clock: the one where it starts
-                        # later after its file's first message
-                        lag_a = head_a.topics[topic].first_ns - sa
-                        lag_b = head_b.topics[topic].first_ns - sb
-                        if lag_a > lag_b:
-                            channel[(0, topic)] = (offset - o) / 1e9
-                        else:
-                            channel[(1, topic)] = (o - offset) / 1e9
-        else:
-            if shared:
-                how = "first messages"
-                offset = _median_int([head_a.topics[t].first_ns - head_b.topics[t].first_ns
-                                      for t in shared])
-                best = (_best_offset(list(signals.values()), offset, shift, bin_s,
-                                     MATCH_RANGE_S) if signals else None)
-                if best is not None:
-                    how, offset = "best match of content", best
-            else:
-                how, offset = "file starts", sa - sb
-    elif method == "first":
-        how, offset = "file starts", sa - sb
-    elif method == "log-time":
-        how, offset = "log time", 0
-    else:
-        ta, tb = head_a.topics.get(method), head_b.topics.get(method)
-        if ta is None or tb is None:
-            raise UsageError(
-                f"--align {method}: that channel has no message in the first {HEAD_S:g} s of "
-                f"{'either recording' if ta is None and tb is None else 'one recording'}",
-                "name a channel both recordings publish from their start, or use --align auto")
-        how, offset = f"first message of {method}", ta.first_ns - tb.first_ns
-    origin = max(sa, sb + offset)
-    alignment = Alignment(how, offset / 1e9, matches, channel, origin,
-                          ((sa - origin) / 1e9, (sb + offset - origin) / 1e9), flushed)
-    rules, noisy = _learn(head_a, head_b, alignment, bin_s, baseline_s, tolerance, learn,
-                          list(ignore))
-    return alignment, rules, noisy, tuple(warnings), (head_a.resume, head_b.resume)
+    for topic, vs in sorted(by_topic.items()):
+        own = _agreeing(vs, width)
+        if len(own) >= MIN_CHANNEL_MATCHES and 5 * len(own) >= 4 * len(vs):
+            o = _median_int(own)
+            if abs(o - offset) > width:
+                lag_a = head_a.topics[topic].first_ns - sa
+                lag_b = head_b.topics[topic].first_ns - sb
+                if lag_a > lag_b:
+                    channel[(0, topic)] = (offset - o) / 1e9
+                else:
+                    channel[(1, topic)] = (o - offset) / 1e9
+    return channel
 
 
 #: A channel is flushed in a recording when at least this fraction of its messages in the head

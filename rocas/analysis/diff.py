@@ -13,7 +13,7 @@ import numpy as np
 from rocas.analysis.align import Alignment, describe
 from rocas.analysis.align import align as align_recordings
 from rocas.analysis.changepoints import ChangePointConfig, ChangePoints, detect
-from rocas.analysis.changepoints import median as changepoint_median
+from rocas.analysis.checks import account_warnings, check_pair, span_warnings
 from rocas.analysis.cmg import (
     MODULE,
     ChannelModuleGraph,
@@ -28,7 +28,7 @@ from rocas.analysis.entries import change_points_from, entries_to_pass
 from rocas.analysis.mdr import Tolerance
 from rocas.analysis.noise import FieldRules
 from rocas.analysis.pinpoint import PinpointResult, find_initial_module, past_the_window
-from rocas.analysis.series import REPEAT_S, ChannelAccount, ChannelSeries, compute_series
+from rocas.analysis.series import ChannelAccount, ChannelSeries, SeriesResult, compute_series
 from rocas.errors import RecordingError, TopologyError, UsageError
 from rocas.recording.decoding import DecoderCache
 from rocas.recording.formats import open_recording
@@ -36,17 +36,6 @@ from rocas.recording.model import ChannelInfo
 from rocas.recording.reader import Recording
 
 REORDER_WINDOW_S = 1.0  # how far out of log-time order a message may be written for one pass [s]
-#: Bins at the start of each channel, with messages in both recordings, over which two runs
-#: of the same thing must still agree (the paper's premise: a deviation comes later).
-START_BINS = 10
-#: Largest median, over shared channels, of the mean MDR in those bins for a pair diffed
-#: without a warning. Two runs of one catalog scenario measure at most 0.07 (the demo pair 0),
-#: two different catalog accidents 0.33 to 0.61; a stack whose headers carry wall-clock
-#: stamps measures more (tests/foreign_stack.py: 0.38), so this alone only warns.
-MAX_START_MDR = 0.2
-#: Relative difference of the two spans above which a pair that already differs at the
-#: start is refused as two different drives [fraction of the longer span].
-MAX_SPAN_DIFFERENCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -407,14 +396,50 @@ def diff(
             two runs of the same thing, a recording without a stretch of time to compare.
         TopologyError: no topology, or no control channel.
     """
+    _check_settings(bin_s, delta_s, atol, rtol)
+    spec = load_cmg(cmg) if isinstance(cmg, (str, os.PathLike)) else cmg
+    cfg = change_points or ChangePointConfig()
+    rec_a, rec_b = _open_pair(accident, reference, control_channel_topic, spec)
+    read = _read_pair(rec_a, rec_b, Tolerance(atol, rtol), cfg, bin_s=bin_s, align=align,
+                      ignore_fields=ignore_fields, learn_noise=learn_noise,
+                      adjacent=not strict_bins, progress=progress)
+    res, alignment = read.series, read.alignment
+    _refuse_nothing_to_compare(res, alignment, (accident, rec_a), (reference, rec_b))
+    topology = _topology(accident, rec_a, reference, rec_b, spec, control_channel_topic)
+    pair_warnings = check_pair(res, str(accident), str(reference), cfg,
+                               allow_unrelated=allow_unrelated,
+                               intact=rec_a.report.intact and rec_b.report.intact)
+    rows = _channel_rows(res, topology.graph, topology.control, cfg)
+    walks = _walks(res, rows, topology.graph, topology.control, delta_s, bin_s)
+    warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
+    warnings += res.warnings + pair_warnings + topology.warnings
+    warnings += _pass_warnings(res, rows.rows, alignment, str(accident), str(reference))
+    return DiffResult(
+        accident=str(accident), reference=str(reference), channels=rows.rows,
+        cmg=topology.graph, pinpoint=walks.pinpoint, bin_s=bin_s, delta_s=delta_s,
+        messages_read=res.messages_read, warnings=warnings, entries=walks.entries,
+        control_onset_s=walks.control_onset_s, alignment=alignment, compared_s=res.compared_s,
+        accounts=res.accounts, rules=read.rules, noisy_start=read.noisy,
+        first_differing_s=walks.first_differing_s, last_alike_s=walks.last_alike_s,
+        timing_s=res.timing_s,
+    )
+
+
+def _check_settings(bin_s: float, delta_s: float, atol: float, rtol: float) -> None:
+    """Refuse a bin width, window or tolerance out of range (UsageError)."""
     if not bin_s > 0:
         raise UsageError(f"--bin must be positive, got {bin_s:g}")
     if not delta_s >= 0:
         raise UsageError(f"--delta must be zero or positive, got {delta_s:g}")
     if atol < 0 or rtol < 0:
         raise UsageError("--atol and --rtol must be zero or positive")
-    spec = load_cmg(cmg) if isinstance(cmg, (str, os.PathLike)) else cmg
-    cfg = change_points or ChangePointConfig()
+
+
+def _open_pair(accident: str | os.PathLike[str], reference: str | os.PathLike[str],
+               control_channel_topic: str | None, spec: CmgSpec | None
+               ) -> tuple[Recording, Recording]:
+    """Open both recordings (one decoder cache), and refuse a control channel (asked for, or
+    named by the CMG file) that neither summary lists before anything is read."""
     decoders = DecoderCache()
     rec_a: Recording = open_recording(accident, decoders)
     rec_b: Recording = open_recording(reference, decoders)
@@ -423,22 +448,49 @@ def diff(
         if chosen:
             _refuse_unknown_channel_early(chosen, str(origin), rec_a, rec_b, both_names=(
                 f"{accident} or {reference}"))
+    return rec_a, rec_b
 
-    tolerance = Tolerance(atol, rtol)
+
+@dataclass(frozen=True)
+class _Read:
+    """The pair as read: how the reference was put on the accident's clock, topic -> how its
+    messages were compared, whether the pair is noisy at its start, and the MDR series."""
+
+    alignment: Alignment
+    rules: dict[str, FieldRules]
+    noisy: bool
+    series: SeriesResult
+
+
+def _read_pair(rec_a: Recording, rec_b: Recording, tolerance: Tolerance,
+               cfg: ChangePointConfig, *, bin_s: float, align: str,
+               ignore_fields: Sequence[str], learn_noise: bool, adjacent: bool,
+               progress: Callable[[int, int], None] | None) -> _Read:
+    """Align the pair, learn from its start how to compare it, and stream it into series
+    (the alignment's warnings first among the series' warnings)."""
     alignment, rules, noisy, align_warnings, resume = align_recordings(
         rec_a, rec_b, method=align, bin_s=bin_s, baseline_s=cfg.baseline_s,
         tolerance=None if tolerance.exact else tolerance, learn=learn_noise,
         ignore=ignore_fields)
     res = compute_series(
         rec_a, rec_b, bin_s=bin_s, tolerance=tolerance,
-        reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=not strict_bins, progress=progress,
+        reorder_window_s=REORDER_WINDOW_S, adjacent_pairing=adjacent, progress=progress,
         alignment=alignment, rules=rules, resume=resume,
     )
     res = dataclasses.replace(res, warnings=align_warnings + res.warnings)
+    return _Read(alignment, rules, noisy, res)
+
+
+def _refuse_nothing_to_compare(res: Any, alignment: Alignment,
+                               accident: tuple[str | os.PathLike[str], Recording],
+                               reference: tuple[str | os.PathLike[str], Recording]) -> None:
+    """Refuse a pair with a recording that holds no readable message, or whose two files (on
+    one clock, as aligned) share no span of time (RecordingError). ``accident``,
+    ``reference``: (path, recording)."""
     empty = [
         (role, path, rec)
-        for role, path, rec, n in (("accident", accident, rec_a, res.messages_read[0]),
-                                   ("reference", reference, rec_b, res.messages_read[1]))
+        for role, (path, rec), n in (("accident", accident, res.messages_read[0]),
+                                     ("reference", reference, res.messages_read[1]))
         if n == 0
     ]
     if empty:
@@ -456,7 +508,7 @@ def diff(
     if res.compared_s[1] <= 0 and min(res.span_s) > 0:
         # the two files (on one clock, as aligned) do not overlap: nothing can be compared
         raise RecordingError(
-            f"{accident} and {reference} share no span of time: aligned as "
+            f"{accident[0]} and {reference[0]} share no span of time: aligned as "
             f"{describe(alignment)}, the {'reference' if alignment.starts_s[1] >= 0 else 'accident'}"
             f" starts after the other ends (the accident covers "
             f"{alignment.starts_s[0]:.2f} to {res.ends_s[0]:.2f} s, the reference "
@@ -464,6 +516,24 @@ def diff(
             "diff recordings of the same drive; if they are on one clock with no identical "
             "message, try --align first or --align log-time",
         )
+
+
+@dataclass(frozen=True)
+class _Topology:
+    """The pair's channel-module graph, the channel Algorithm 1 starts from, and the warning
+    lines building them gave (channels a --cmg file names that neither recording has, the
+    reference's topology standing in for the accident's)."""
+
+    graph: ChannelModuleGraph
+    control: str
+    warnings: tuple[str, ...]
+
+
+def _topology(accident: str | os.PathLike[str], rec_a: Recording,
+              reference: str | os.PathLike[str], rec_b: Recording, spec: CmgSpec | None,
+              control_channel_topic: str | None) -> _Topology:
+    """The CMG from the recordings' channel declarations (``spec`` supplying or overriding
+    them), and its control channel."""
     channel_infos, topology_note = _channels_for_topology(
         str(accident), list(rec_a.channels.values()),
         str(reference), list(rec_b.channels.values()),
@@ -477,27 +547,31 @@ def diff(
         spec = spec.restricted_to(recorded)
     graph = build_cmg(channel_infos, spec, where=both)
     ctrl = control_channel(graph, control_channel_topic, spec, where=both)
-    pair_warnings = check_pair(res, str(accident), str(reference), cfg,
-                               allow_unrelated=allow_unrelated,
-                               intact=rec_a.report.intact and rec_b.report.intact)
+    return _Topology(graph, ctrl, tuple(cmg_warnings) + topology_note)
 
+
+@dataclass(frozen=True)
+class _Rows:
+    """Each channel's row, with the t* Algorithm 1 walks on: ``t_star`` topic -> first
+    departure [s] (None: none), ``t_after`` the same past the bins where content entered
+    both runs, and ``entries`` topic -> the bin index of such an entry."""
+
+    rows: tuple[ChannelDiff, ...]
+    t_star: dict[str, float | None]
+    t_after: dict[str, float | None]
+    entries: dict[str, int]
+
+
+def _channel_rows(res: Any, graph: ChannelModuleGraph, ctrl: str, cfg: ChangePointConfig
+                  ) -> _Rows:
+    """Each channel's change points, departure and row of the report, in topic order."""
     rows: list[ChannelDiff] = []
     t_star: dict[str, float | None] = {}
     entries = entries_to_pass(res.series, graph)
     t_after: dict[str, float | None] = {}
     for topic, s in res.series.items():
         cps = detect(s.mdr, s.times_s, cfg)
-        t_star[topic] = t_after[topic] = cps.first_s
-        if not cps.times_s and topic != ctrl:
-            # no change point, but the runs start alike and then differ well above the
-            # channel's noise: it departed at its first differing bin (its baseline holds the
-            # departure), which the window can then see; a pair noisy from its first bin on
-            # (another stack's sensors) is left alone. (A channel whose only change points
-            # fall, the runs converging, has no departure: t* stays undefined.)
-            nz = np.flatnonzero(s.mdr > 0)
-            base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
-            if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
-                t_star[topic] = t_after[topic] = float(s.times_s[nz[0]])
+        t_star[topic] = t_after[topic] = _departure(s, cps, is_control=topic == ctrl)
         entry = entries.get(topic)
         after = None if entry is None else change_points_from(s, cfg, entry)
         if after is not None:
@@ -519,29 +593,67 @@ def diff(
                 after_entry=after,
             )
         )
+    return _Rows(tuple(rows), t_star, t_after, entries)
+
+
+def _departure(s: ChannelSeries, cps: ChangePoints, is_control: bool) -> float | None:
+    """When a channel departed [s]: its first change point; without one (the control channel
+    aside), its first differing bin when the runs start alike and then differ well above the
+    channel's noise (its baseline holds the departure, which the window can then see). A pair
+    noisy from its first bin on (another stack's sensors) is left alone, and a channel whose
+    only change points fall (the runs converging) has no departure."""
+    if cps.times_s or is_control:
+        return cps.first_s
+    nz = np.flatnonzero(s.mdr > 0)
+    base = float(np.mean(s.mdr)) if len(s.mdr) else 0.0
+    if len(nz) and nz[0] > 0 and base >= BASELINE_DEPARTURE_SIGMAS * cps.noise_std > 0:
+        return float(s.times_s[nz[0]])
+    return cps.first_s
+
+
+@dataclass(frozen=True)
+class _Walks:
+    """Algorithm 1's result, and its result past content entries (None without any), with
+    what they were given: the control channel's first differing bin [s] (None: its messages
+    are the same) and topic -> the first differing message / the last alike bin [s]."""
+
+    pinpoint: PinpointResult
+    entries: PinpointResult | None
+    control_onset_s: float | None
+    first_differing_s: dict[str, float]
+    last_alike_s: dict[str, float]
+
+
+def _walks(res: Any, rows: _Rows, graph: ChannelModuleGraph, ctrl: str, delta_s: float,
+           bin_s: float) -> _Walks:
+    """Algorithm 1 on the channels' departures, and again past content entries."""
     ctrl_series = res.series.get(ctrl)
     differing = np.flatnonzero(ctrl_series.mdr > 0) if ctrl_series is not None else ()
     onset = float(ctrl_series.times_s[differing[0]]) if len(differing) else None
-    within = _first_differing(res.series, t_star)
-    alike = _last_alike(res.series, t_star, bin_s)
-    pin = find_initial_module(graph, t_star, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s,
-                              first_differing_s=within, last_alike_s=alike,
+    within = _first_differing(res.series, rows.t_star)
+    alike = _last_alike(res.series, rows.t_star, bin_s)
+    pin = find_initial_module(graph, rows.t_star, ctrl, delta_s, control_onset_s=onset,
+                              bin_s=bin_s, first_differing_s=within, last_alike_s=alike,
                               timing_s=res.timing_s)
     pin_entries = None
-    if entries:
-        pin_entries = find_initial_module(graph, t_after, ctrl, delta_s, control_onset_s=onset,
-                                          bin_s=bin_s,
-                                          first_differing_s=_first_differing(res.series, t_after),
-                                          last_alike_s=_last_alike(res.series, t_after, bin_s),
-                                          timing_s=res.timing_s)
-    warnings = tuple(rec_a.report.warnings(str(accident)) + rec_b.report.warnings(str(reference)))
-    warnings += res.warnings + pair_warnings
-    warnings += tuple(cmg_warnings) + topology_note
-    warnings += tuple(
+    if rows.entries:
+        pin_entries = find_initial_module(
+            graph, rows.t_after, ctrl, delta_s, control_onset_s=onset, bin_s=bin_s,
+            first_differing_s=_first_differing(res.series, rows.t_after),
+            last_alike_s=_last_alike(res.series, rows.t_after, bin_s),
+            timing_s=res.timing_s)
+    return _Walks(pin, pin_entries, onset, within, alike)
+
+
+def _pass_warnings(res: Any, rows: tuple[ChannelDiff, ...], alignment: Alignment,
+                   accident: str, reference: str) -> tuple[str, ...]:
+    """What the comparison left out or had to widen: channels in one recording only, what
+    lies outside the shared span, messages set aside, and a wider reorder window."""
+    warnings = tuple(
         f"channel {c.topic} is only in the {c.only_in} recording" for c in rows if c.only_in
     )
-    warnings += _span_warnings(res, alignment, str(accident), str(reference))
-    warnings += _account_warnings(res)
+    warnings += span_warnings(res, alignment, accident, reference)
+    warnings += account_warnings(res)
     if res.reorder_window_s > REORDER_WINDOW_S:
         warnings += tuple(
             f"{path}: messages are written up to {late:.1f} s out of log-time order; paired "
@@ -550,27 +662,7 @@ def diff(
             for path, late in zip((accident, reference), res.disorder_s, strict=True)
             if late > REORDER_WINDOW_S
         )
-    return DiffResult(
-        accident=str(accident),
-        reference=str(reference),
-        channels=tuple(rows),
-        cmg=graph,
-        pinpoint=pin,
-        bin_s=bin_s,
-        delta_s=delta_s,
-        messages_read=res.messages_read,
-        warnings=warnings,
-        entries=pin_entries,
-        control_onset_s=onset,
-        alignment=alignment,
-        compared_s=res.compared_s,
-        accounts=res.accounts,
-        rules=rules,
-        noisy_start=noisy,
-        first_differing_s=within,
-        last_alike_s=alike,
-        timing_s=res.timing_s,
-    )
+    return warnings
 
 
 def _last_alike(series: dict[str, ChannelSeries], t_star: dict[str, float | None],
@@ -603,56 +695,6 @@ def _first_differing(series: dict[str, ChannelSeries], t_star: dict[str, float |
     return out
 
 
-def _span_warnings(res: Any, alignment: Alignment, accident: str, reference: str
-                   ) -> tuple[str, ...]:
-    """What lies outside the span both recordings cover (one line per file that has some)."""
-    out = []
-    lo, hi = res.compared_s
-    half = res.bin_s / 2
-    for side, (path, other) in enumerate(((accident, reference), (reference, accident))):
-        start, end = alignment.starts_s[side], res.ends_s[side]
-        parts = []
-        if start < lo - half:
-            parts.append(f"its first {lo - start:.2f} s")
-        if end > hi + half:
-            parts.append(f"its last {end - hi:.2f} s")
-        if parts:
-            out.append(f"{path}: {' and '.join(parts)} lie outside the span both recordings "
-                       f"cover (compared {lo:.2f}-{hi:.2f} s, aligned as {describe(alignment)}); "
-                       f"{other} has nothing there to compare with")
-    return tuple(out)
-
-
-def _account_warnings(res: Any) -> tuple[str, ...]:
-    """Messages set aside or left out, and channels that fall silent, one line per kind."""
-    def listing(items: list[tuple[str, tuple[int, int]]]) -> str:
-        shown = [f"{t} ({a} in the accident, {b} in the reference)" for t, (a, b) in items[:4]]
-        more = f" and {len(items) - 4} more channels" if len(items) > 4 else ""
-        return ", ".join(shown) + more
-
-    accounts = sorted(res.accounts.items())
-    out = []
-    aside = [(t, a.aside) for t, a in accounts if any(a.aside)]
-    if aside:
-        n = sum(x + y for _, (x, y) in aside)
-        out.append(f"{n} messages had no partner in the other recording while it published "
-                   f"the channel close by (lost there, or another rate), and were set aside: "
-                   f"{listing(aside)}")
-    rep = [(t, a.repeated) for t, a in accounts if any(a.repeated)]
-    if rep:
-        n = sum(x + y for _, (x, y) in rep)
-        out.append(f"{n} messages were logged twice (the same payload again within "
-                   f"{REPEAT_S * 1000:g} ms) and counted once: {listing(rep)}")
-    for t, a in accounts:
-        for side, role, other in ((0, "accident", "reference"), (1, "reference", "accident")):
-            stop = a.stops_s[side]
-            if stop is not None:
-                out.append(f"channel {t} falls silent at {stop:.2f} s in the {role} while the "
-                           f"{other} goes on publishing it; its messages after that count as "
-                           "differing (a module that stopped, or a log cut short)")
-    return tuple(out)
-
-
 def _refuse_unknown_channel_early(
     topic: str, origin: str, rec_a: Recording, rec_b: Recording, both_names: str
 ) -> None:
@@ -672,76 +714,3 @@ def _refuse_unknown_channel_early(
             f"control channel {topic!r} (from {origin}) is not in {both_names}",
             f"choose one of: {', '.join(sorted(listed))}",
         )
-
-
-def check_pair(
-    res: Any, accident: str, reference: str, cfg: ChangePointConfig, *,
-    allow_unrelated: bool = False, intact: bool = True,
-) -> tuple[str, ...]:
-    """Check that two recordings are two runs of the same thing; returns warning lines.
-
-    Refused (RecordingError): a recording whose messages all share one log time (no stretch
-    of time to compare); a pair sharing fewer than half of their channels; a pair whose
-    shared channels already differ at the start (the median, over shared channels, of the
-    mean MDR in each channel's first :data:`START_BINS` bins with messages in both
-    recordings is over :data:`MAX_START_MDR`: runs of one scenario agree there, aligned at
-    their first messages) *and* whose spans differ by more than :data:`MAX_SPAN_DIFFERENCE`.
-    ``allow_unrelated`` turns those two refusals into warnings. Warned: a pair that differs
-    at the start with equal spans (wall-clock stamps in headers look like that too), a
-    recording shorter than the change points' baseline window. (What one file covers beyond
-    the other is not compared; :func:`_span_warnings` says so.)
-
-    Args:
-        res: the pair's :class:`~rocas.analysis.series.SeriesResult`.
-        intact: both recordings were read whole (a damaged one's span says nothing about the
-            drive, so the spans then refuse nothing).
-    """
-    out: list[str] = []
-    names = (accident, reference)
-    for path, span, n in zip(names, res.span_s, res.messages_read, strict=True):
-        if span <= 0:
-            raise RecordingError(
-                f"{path} holds {n} readable message{'s' if n != 1 else ''}, all at one log "
-                "time: there is no run over time to compare",
-                "diff recordings that cover the drive up to the accident",
-            )
-        if span < cfg.baseline_s:
-            out.append(
-                f"{path} covers only {span:.2f} s, less than the {cfg.baseline_s:g} s baseline "
-                "the change points are judged against"
-            )
-    short, long_ = sorted(res.span_s)
-    refuse: list[str] = []
-    topics = res.channels
-    shared = [t for t, (a, b) in topics.items() if a is not None and b is not None]
-    if 2 * len(shared) < len(topics):
-        refuse.append(f"they share only {len(shared)} of their {len(topics)} channels")
-    start_mdr = []
-    for t in shared:
-        s = res.series[t]
-        both = (s.messages[:, 0] > 0) & (s.messages[:, 1] > 0)
-        if both.any():
-            start_mdr.append(float(s.mdr[both][:START_BINS].mean()))
-    median = changepoint_median(np.asarray(start_mdr)) if start_mdr else 0.0
-    if median > MAX_START_MDR:
-        differ = (f"at the start, where two runs of one scenario agree, their shared channels "
-                  f"already differ (median MDR {median:.2f} over each channel's first "
-                  f"{START_BINS} bins, more than {MAX_START_MDR:g})")
-        if intact and long_ - short > MAX_SPAN_DIFFERENCE * long_:
-            refuse.append(f"{differ}, and they cover {res.span_s[0]:.2f} s and "
-                          f"{res.span_s[1]:.2f} s")
-        else:
-            out.append(f"{accident} and {reference} may not be two runs of the same thing: "
-                       f"{differ}; if they are, the difference is sensor noise or wall-clock "
-                       "stamps (--atol/--rtol loosen float fields)")
-    if refuse:
-        what = (f"{accident} and {reference} do not look like two runs of the same thing: "
-                + "; ".join(refuse))
-        if not allow_unrelated:
-            raise RecordingError(
-                what,
-                "diff an accident against a run of the same scenario, or pass "
-                "--allow-unrelated to diff these anyway",
-            )
-        out.append(what + " (diffed anyway: --allow-unrelated)")
-    return tuple(out)

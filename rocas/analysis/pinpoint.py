@@ -153,7 +153,38 @@ def find_initial_module(
         timing_s: how far apart the two runs log one message [s]: first differing messages
             closer than this within one bin are a tie (the upstream rule decides).
     """
-    succ = cmg.successors
+    t_star = _node_t_star(cmg.successors, channel_t_star)
+    removed = _removed_edges(cmg, t_star, delta_s, last_alike_s)
+    start: Node = (CHANNEL, control_channel)
+    fallback = _fallback(cmg.successors, start, t_star.get(start), control_channel,
+                         control_onset_s, bin_s, delta_s)
+    walk = _walk(cmg.successors, t_star, start, removed, fallback, control_onset_s, delta_s,
+                 first_differing_s)
+    ranked = _rank(walk)
+    deviating = _choose(walk, ranked.candidates, timing_s, last_alike_s)
+    path: tuple[str, ...] = ()
+    if deviating is not None:
+        nodes = _shortest_path(walk.upstream, walk.downstream, start, (MODULE, deviating))
+        path = tuple(n for _, n in nodes)
+    result = PinpointResult(
+        deviating_module=deviating,
+        control_channel=control_channel,
+        t_star=t_star,
+        reachable=ranked.reachable,
+        removed_edges=tuple(removed),
+        path=path,
+        exclusions=_exclusions(cmg, walk, ranked, deviating, removed, control_channel),
+        fallback=fallback,
+    )
+    if past_window and fallback is None and deviating in cmg.writers_of(control_channel):
+        return past_the_window(cmg, channel_t_star, result, delta_s)
+    return result
+
+
+def _node_t_star(succ: Mapping[Node, Collection[Node]],
+                 channel_t_star: Mapping[str, float | None]) -> dict[Node, float | None]:
+    """Step 1: node -> t* [s]: a channel's first change point, a module's the earliest among
+    the channels it writes (None when undefined); channels first, in node order."""
     t_star: dict[Node, float | None] = {}
     for node in succ:
         kind, name = node
@@ -164,7 +195,15 @@ def find_initial_module(
         if kind == MODULE:
             ts = [t_star[v] for v in outs if t_star.get(v) is not None]
             t_star[node] = min(ts) if ts else None  # type: ignore[type-var]
+    return t_star
 
+
+def _removed_edges(cmg: ChannelModuleGraph, t_star: Mapping[Node, float | None],
+                   delta_s: float, last_alike_s: Mapping[str, float] | None
+                   ) -> list[RemovedEdge]:
+    """Step 2: the edges whose source's t* is undefined or outside the window before their
+    target's (an input not seen alike since before its target departed is kept: its
+    departure may lie anywhere after its last alike bin), in edge order."""
     removed: list[RemovedEdge] = []
     for u, v in sorted(cmg.edges):
         tu, tv = t_star[u], t_star[v]
@@ -179,32 +218,76 @@ def find_initial_module(
         else:
             reason = f"t*({u[1]}) = {tu:g} s is outside [{tv - delta_s:g}, {tv:g}] s"
         removed.append(RemovedEdge(u, v, reason))
+    return removed
 
-    start: Node = (CHANNEL, control_channel)
-    fallback: str | None = None
-    t_control = t_star.get(start)
+
+def _fallback(succ: Mapping[Node, Collection[Node]], start: Node, t_control: float | None,
+              control_channel: str, control_onset_s: float | None, bin_s: float | None,
+              delta_s: float) -> str | None:
+    """Why the control channel gives the walk no start (no change point, or only one in its
+    first bin), when it does not; None for the paper's walk (module docstring)."""
     from_start = (t_control is not None and bin_s is not None and control_onset_s is not None
                   and t_control <= bin_s * (1 + 1e-9))
-    if start in succ and (t_control is None or from_start):
-        fallback = ((f"{control_channel}'s first change point ({_fmt(t_control)}) is its first "
-                     "bin after the start, so nothing before it shows the two executions alike "
-                     f"(its messages differ from {control_onset_s:g} s on)") if from_start
-                    else f"{control_channel} has no change point (its messages "
-                    + (f"differ from {control_onset_s:g} s on" if control_onset_s is not None
-                       else "are the same in both recordings") + ")")
-        fallback += ", so the walk starts from every module it depends on" + (
-            f" that departs within [{control_onset_s - delta_s:g}, {control_onset_s:g}] s"
-            if control_onset_s is not None else "")
+    if start not in succ or not (t_control is None or from_start):
+        return None
+    fallback = ((f"{control_channel}'s first change point ({_fmt(t_control)}) is its first "
+                 "bin after the start, so nothing before it shows the two executions alike "
+                 f"(its messages differ from {control_onset_s:g} s on)") if from_start
+                else f"{control_channel} has no change point (its messages "
+                + (f"differ from {control_onset_s:g} s on" if control_onset_s is not None
+                   else "are the same in both recordings") + ")")
+    return fallback + ", so the walk starts from every module it depends on" + (
+        f" that departs within [{control_onset_s - delta_s:g}, {control_onset_s:g}] s"
+        if control_onset_s is not None else "")
 
-    def explains(tm: float) -> bool:
+
+@dataclass(frozen=True)
+class _Walk:
+    """The graph Algorithm 1 walks and what ranks the modules it reaches.
+
+    Attributes:
+        succ: the CMG's node -> successors; t_star: node -> t* [s].
+        start: the control channel's node.
+        fallback: :func:`_fallback`'s reason, or None for the paper's walk.
+        control_onset_s, delta_s: the commands' first differing bin and the window [s].
+        upstream: node -> the kept edges' sources, in node order (the reversed graph,
+            pruned unless the walk has no start: the fallback walks it whole).
+        downstream: node -> the kept edges' targets, in edge order.
+        depth: node -> edges from ``start`` in the reversed graph (empty without a start).
+        first_differing_s: topic -> first differing message in the bin of its t* [s].
+    """
+
+    succ: Mapping[Node, Collection[Node]]
+    t_star: Mapping[Node, float | None]
+    start: Node
+    fallback: str | None
+    control_onset_s: float | None
+    delta_s: float
+    upstream: dict[Node, list[Node]]
+    downstream: dict[Node, list[Node]]
+    depth: dict[Node, int]
+    first_differing_s: Mapping[str, float] | None
+
+    def explains(self, tm: float) -> bool:
         """Whether a module departing at ``tm`` can explain the commands (the fallback's
         window before their first difference; always, on the paper's walk)."""
-        return (not fallback or control_onset_s is None
-                or control_onset_s - delta_s <= tm <= control_onset_s)
+        return (not self.fallback or self.control_onset_s is None
+                or self.control_onset_s - self.delta_s <= tm <= self.control_onset_s)
 
-    # the reversed graph, pruned unless the walk has no start (the fallback walks it whole):
-    # upstream[v] lists the kept edges' sources in node order, downstream[u] their targets in
-    # edge order
+    def within_bin(self, m: str, tm: float) -> float:
+        """The module's first differing message at its t* (its t* without that detail)."""
+        if not self.first_differing_s:
+            return tm
+        return min((self.first_differing_s.get(v[1], tm) for v in self.succ[(MODULE, m)]
+                    if self.t_star.get(v) == tm), default=tm)
+
+
+def _walk(succ: Mapping[Node, Collection[Node]], t_star: Mapping[Node, float | None],
+          start: Node, removed: list[RemovedEdge], fallback: str | None,
+          control_onset_s: float | None, delta_s: float,
+          first_differing_s: Mapping[str, float] | None) -> _Walk:
+    """Step 3's graph: the reversed graph less the removed edges (all kept for the
+    fallback), and each node's distance from the control channel in it."""
     gone = set() if fallback else {(e.source, e.target) for e in removed}
     upstream: dict[Node, list[Node]] = {n: [] for n in succ}
     downstream: dict[Node, list[Node]] = {}
@@ -213,67 +296,93 @@ def find_initial_module(
         for v in downstream[u]:
             upstream[v].append(u)
     depth = _depths(upstream, start) if start in succ else {}
-    # a module that reads the control channel reports the vehicle's response to it (the
-    # chassis): without a change point on that channel, its deviation may be the commands'
-    # or the world's. With the commands the same in both runs and no other module departing,
-    # nothing else in the graph explains it, and it is named (the plant's own output changed)
-    feedback = {n for k, n in succ.get(start, ()) if k == MODULE} if fallback else set()
+    return _Walk(succ, t_star, start, fallback, control_onset_s, delta_s, upstream, downstream,
+                 depth, first_differing_s)
 
-    def within_bin(m: str, tm: float) -> float:
-        """The module's first differing message at its t* (its t* without that detail)."""
-        if not first_differing_s:
-            return tm
-        return min((first_differing_s.get(v[1], tm) for v in succ[(MODULE, m)]
-                    if t_star.get(v) == tm), default=tm)
 
-    def candidates_without(left_out: set[str]) -> tuple[frozenset[str], list]:
-        reach = frozenset(n for k, n in depth if k == MODULE and n not in left_out)
-        return reach, [(tm, within_bin(m, tm), -depth.get((MODULE, m), 0), m) for m in reach
-                       if (tm := t_star[(MODULE, m)]) is not None and explains(tm)]
+#: A module the walk may name: (t* [s], first differing message [s], minus its depth, name).
+_Candidate = tuple[float, float, int, str]
 
-    reachable, candidates = candidates_without(feedback)
-    if not candidates and feedback and control_onset_s is None:
-        feedback = set()
-        reachable, candidates = candidates_without(feedback)
+
+@dataclass(frozen=True)
+class _Ranked:
+    """The modules the walk reaches, less ``feedback`` (the modules that read the control
+    channel, when they are left out), and those of them that may be the answer."""
+
+    feedback: frozenset[str]
+    reachable: frozenset[str]
+    candidates: list[_Candidate]
+
+
+def _rank(walk: _Walk) -> _Ranked:
+    """The reachable modules with a t* that explains the commands.
+
+    A module that reads the control channel reports the vehicle's response to it (the
+    chassis): without a change point on that channel, its deviation may be the commands' or
+    the world's, so the fallback leaves it out. With the commands the same in both runs and
+    no other module departing, nothing else in the graph explains it, and it is kept (the
+    plant's own output changed).
+    """
+    def without(left_out: frozenset[str]) -> _Ranked:
+        reach = frozenset(n for k, n in walk.depth if k == MODULE and n not in left_out)
+        return _Ranked(left_out, reach, [
+            (tm, walk.within_bin(m, tm), -walk.depth.get((MODULE, m), 0), m) for m in reach
+            if (tm := walk.t_star[(MODULE, m)]) is not None and walk.explains(tm)])
+
+    feedback = frozenset(n for k, n in walk.succ.get(walk.start, ()) if k == MODULE
+                         ) if walk.fallback else frozenset()
+    ranked = without(feedback)
+    if not ranked.candidates and feedback and walk.control_onset_s is None:
+        ranked = without(frozenset())
+    return ranked
+
+
+def _choose(walk: _Walk, candidates: list[_Candidate], timing_s: float,
+            last_alike_s: Mapping[str, float] | None) -> str | None:
+    """The candidate with the earliest t* (module docstring's tie rule); first differing
+    messages closer than ``timing_s`` are a tie, and a module upstream whose departure may
+    lie before the answer's t* (a gap before its own) goes first."""
     deviating = min(candidates)[3] if candidates else None
     if deviating is not None and timing_s > 0:
         first = min(candidates)
         tied = [c for c in candidates if c[0] == first[0] and c[1] <= first[1] + timing_s]
         deviating = min(tied, key=lambda c: (c[2], c[1], c[3]))[3]
     if deviating is not None and last_alike_s:
-        t0 = t_star[(MODULE, deviating)]
-        d0 = depth.get((MODULE, deviating), 0)
+        t0 = walk.t_star[(MODULE, deviating)]
+        d0 = walk.depth.get((MODULE, deviating), 0)
 
         def may_precede(m: str, tm: float) -> bool:
-            lo = min((last_alike_s.get(v[1], tm) for v in succ[(MODULE, m)]
-                      if t_star.get(v) == tm), default=tm)
+            lo = min((last_alike_s.get(v[1], tm) for v in walk.succ[(MODULE, m)]
+                      if walk.t_star.get(v) == tm), default=tm)
             return tm > t0 and lo < t0 - 1e-9  # type: ignore[operator]
 
         upstream_first = [c for c in candidates if c[2] < -d0 and may_precede(c[3], c[0])]
         if upstream_first:
             deviating = min(upstream_first, key=lambda c: (c[2], c[0], c[1], c[3]))[3]
+    return deviating
 
-    path: tuple[str, ...] = ()
-    if deviating is not None:
-        nodes = _shortest_path(upstream, downstream, start, (MODULE, deviating))
-        path = tuple(n for _, n in nodes)
 
+def _exclusions(cmg: ChannelModuleGraph, walk: _Walk, ranked: _Ranked, deviating: str | None,
+                removed: list[RemovedEdge], control_channel: str) -> dict[str, str]:
+    """module -> why it is not the answer, for every other module with a t*."""
+    t_star = walk.t_star
     exclusions: dict[str, str] = {}
     for m in cmg.modules:
         tm = t_star[(MODULE, m)]
         if m == deviating or tm is None:
             continue
-        if m in reachable and not explains(tm):
+        if m in ranked.reachable and not walk.explains(tm):
             exclusions[m] = (f"its change point ({_fmt(tm)}) is outside "
-                             f"[{control_onset_s - delta_s:g}, {control_onset_s:g}] s, the window "
+                             f"[{walk.control_onset_s - walk.delta_s:g}, "
+                             f"{walk.control_onset_s:g}] s, the window "
                              f"before {control_channel} first differs")
-        elif m in reachable:
+        elif m in ranked.reachable:
             t_dev = t_star[(MODULE, deviating)] if deviating else None
             exclusions[m] = _why_not(
-                m, tm, deviating, t_star, depth, control_channel,
-                (within_bin(m, tm), within_bin(deviating, tm))
+                m, tm, deviating, t_star, walk.depth, control_channel,
+                (walk.within_bin(m, tm), walk.within_bin(deviating, tm))
                 if deviating is not None and t_dev == tm else None)
-        elif m in feedback:
+        elif m in ranked.feedback:
             exclusions[m] = (f"reads {control_channel}, which has no change point to start the "
                              "walk from, so its change may be the vehicle's response to the "
                              "commands")
@@ -287,20 +396,7 @@ def find_initial_module(
                 f"edge {e.source[1]} -> {e.target[1]} removed: {e.reason}" for e in cut[:3]
             )
             exclusions[m] = f"not reachable from {control_channel}" + (f" ({why})" if why else "")
-
-    result = PinpointResult(
-        deviating_module=deviating,
-        control_channel=control_channel,
-        t_star=t_star,
-        reachable=reachable,
-        removed_edges=tuple(removed),
-        path=path,
-        exclusions=exclusions,
-        fallback=fallback,
-    )
-    if past_window and fallback is None and deviating in cmg.writers_of(control_channel):
-        return past_the_window(cmg, channel_t_star, result, delta_s)
-    return result
+    return exclusions
 
 
 def past_the_window(cmg: ChannelModuleGraph, channel_t_star: Mapping[str, float | None],

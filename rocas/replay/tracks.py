@@ -462,6 +462,20 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = (),
     Returns:
         Tracks ordered by their first perception track id.
     """
+    pieces, d = _pieces(d, period_s, tracker)
+    tracks = [track for chain in _stitch(d, pieces, lanes)
+              if (track := _track(d, chain, period_s)) is not None]
+    return sorted(tracks, key=lambda tr: tr.track_ids[0])
+
+
+def _pieces(d: Detections, period_s: float, tracker: AlphaBetaTracker | None
+            ) -> tuple[list[_Piece], Detections]:
+    """One piece per perception track id of a movable obstacle (rows in time order), and the
+    detections with the tracker's lag undone (``d`` itself without a tracker).
+
+    A tracker that coasts has its coasted frames dropped from the pieces (unless that leaves
+    fewer than :data:`MIN_DETECTIONS`) and its lag undone on every row of the track.
+    """
     movable = (d.type != TYPE_UNKNOWN_UNMOVABLE) & ~np.isin(d.sub_type, _STATIC_SUB_TYPES)
     pieces = []
     undone: list[tuple[np.ndarray, np.ndarray]] = []
@@ -478,57 +492,84 @@ def build_tracks(d: Detections, period_s: float, lanes: tuple[Lane, ...] = (),
         for rows, xy in undone:
             fixed[rows] = xy
         d = dataclasses.replace(d, xy=fixed)
-    tracks = []
-    for chain in _stitch(d, pieces, lanes):
-        rows = np.concatenate([p.rows for p in chain])
-        if len(rows) < MIN_DETECTIONS:
-            continue
-        grid, xy, perceived, observed = _resample(d, chain, period_s)
-        kind, model, color, size, notes = _classify(d, rows)
-        raw = d.xy[rows]
-        centre = np.median(raw, axis=0)
-        stationary = bool(np.percentile(np.hypot(*(raw - centre).T), 90) < STATIC_SPREAD_M)
-        if stationary:  # parked: the median pose, not a drift of tracker noise
-            xy = np.repeat(centre[None], len(grid), 0)
-            speed = np.zeros(len(grid))
-            h2 = 2.0 * d.heading[rows]
-            heading = np.full(len(grid), 0.5 * numerics.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
-        else:
-            # a vehicle's twiced where detections surround a sample (the residual smoothed and
-            # added back): a local linear fit cuts a turn's corner by a sigma^2 / 2 (0.1 m for
-            # a car turning at 6.5 m/s on an 11.5 m radius), twicing is exact for quadratic
-            # motion; near a track's ends and gaps it would double the one-sided fit's noise.
-            # Cyclists and pedestrians turn gently at their speeds and are detected no better:
-            # twiced, the LAV-like stack's unrecognised cyclist (l04) put the replayed ego
-            # 0.36 m RMS off instead of 0.26 m
-            once = smooth(grid, xy)
-            sigma = slow_sigma(grid, once)
-            if np.any(sigma > SMOOTH_SIGMA_S):
-                once = smooth(grid, xy, sigma)
-            if kind == "vehicle":
-                xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once, sigma)
-            else:
-                xy = once
-            vel = np.gradient(xy, grid, axis=0)
-            speed = np.hypot(vel[:, 0], vel[:, 1])
-            heading = np.where(speed > MOVING_SPEED_MPS, numerics.arctan2(vel[:, 1], vel[:, 0]),
-                               perceived)
-            # the box orientation, its pi ambiguity resolved toward the direction of travel
-            # (a slow vehicle's: its overall displacement)
-            travel = xy[-1] - xy[0]
-            ref = np.where(speed > MOVING_SPEED_MPS, heading, numerics.arctan2(travel[1], travel[0])
-                           if np.hypot(*travel) > 0.5 else perceived)
-            body = np.where(np.isnan(perceived), ref, perceived)
-            body = np.where(np.cos(body - ref) < 0.0, body + np.pi, body)
-            # the detector's orientation noise, moved ahead to the front axle (paths.py), made
-            # a turning car's target speed jitter by 0.25 m/s (its profile by 3 m/s)
-            body = smooth(grid, np.unwrap(body)[:, None])[:, 0]
-        tracks.append(Track(
-            track_ids=tuple(p.track_id for p in chain), times=grid, xy=xy,
-            heading=wrap(heading), speed=speed, observed=observed, kind=kind, model=model,
-            color=color, size=size, notes=tuple(notes), stationary=stationary,
-            body_heading=wrap(heading if stationary else body)))
-    return sorted(tracks, key=lambda tr: tr.track_ids[0])
+    return pieces, d
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """A track's motion on its time grid: (n, 2) position [m], (n,) speed [m/s], (n,) heading
+    of travel and (n,) heading of the body [rad, unwrapped]."""
+
+    xy: np.ndarray
+    speed: np.ndarray
+    heading: np.ndarray
+    body: np.ndarray
+
+
+def _track(d: Detections, chain: list[_Piece], period_s: float) -> Track | None:
+    """The track of one stitched chain of pieces (None for one with fewer than
+    :data:`MIN_DETECTIONS` detections, spurious)."""
+    rows = np.concatenate([p.rows for p in chain])
+    if len(rows) < MIN_DETECTIONS:
+        return None
+    grid, xy, perceived, observed = _resample(d, chain, period_s)
+    kind, model, color, size, notes = _classify(d, rows)
+    raw = d.xy[rows]
+    centre = np.median(raw, axis=0)
+    stationary = bool(np.percentile(np.hypot(*(raw - centre).T), 90) < STATIC_SPREAD_M)
+    motion = (_parked(d, rows, grid, centre) if stationary
+              else _moving(grid, xy, perceived, observed, kind))
+    return Track(
+        track_ids=tuple(p.track_id for p in chain), times=grid, xy=motion.xy,
+        heading=wrap(motion.heading), speed=motion.speed, observed=observed, kind=kind,
+        model=model, color=color, size=size, notes=tuple(notes), stationary=stationary,
+        body_heading=wrap(motion.body))
+
+
+def _parked(d: Detections, rows: np.ndarray, grid: np.ndarray, centre: np.ndarray) -> _Motion:
+    """A parked obstacle: its median position and mean (axial) heading all along, not a drift
+    of tracker noise."""
+    xy = np.repeat(centre[None], len(grid), 0)
+    speed = np.zeros(len(grid))
+    h2 = 2.0 * d.heading[rows]
+    heading = np.full(len(grid), 0.5 * numerics.arctan2(np.sin(h2).mean(), np.cos(h2).mean()))
+    return _Motion(xy, speed, heading, heading)
+
+
+def _moving(grid: np.ndarray, xy: np.ndarray, perceived: np.ndarray, observed: np.ndarray,
+            kind: str) -> _Motion:
+    """A moving obstacle's motion from its resampled positions ``xy`` and ``perceived``
+    headings, smoothed (``observed``: which samples have detections around them)."""
+    # a vehicle's twiced where detections surround a sample (the residual smoothed and
+    # added back): a local linear fit cuts a turn's corner by a sigma^2 / 2 (0.1 m for
+    # a car turning at 6.5 m/s on an 11.5 m radius), twicing is exact for quadratic
+    # motion; near a track's ends and gaps it would double the one-sided fit's noise.
+    # Cyclists and pedestrians turn gently at their speeds and are detected no better:
+    # twiced, the LAV-like stack's unrecognised cyclist (l04) put the replayed ego
+    # 0.36 m RMS off instead of 0.26 m
+    once = smooth(grid, xy)
+    sigma = slow_sigma(grid, once)
+    if np.any(sigma > SMOOTH_SIGMA_S):
+        once = smooth(grid, xy, sigma)
+    if kind == "vehicle":
+        xy = once + two_sided(grid, observed)[:, None] * smooth(grid, xy - once, sigma)
+    else:
+        xy = once
+    vel = np.gradient(xy, grid, axis=0)
+    speed = np.hypot(vel[:, 0], vel[:, 1])
+    heading = np.where(speed > MOVING_SPEED_MPS, numerics.arctan2(vel[:, 1], vel[:, 0]),
+                       perceived)
+    # the box orientation, its pi ambiguity resolved toward the direction of travel
+    # (a slow vehicle's: its overall displacement)
+    travel = xy[-1] - xy[0]
+    ref = np.where(speed > MOVING_SPEED_MPS, heading, numerics.arctan2(travel[1], travel[0])
+                   if np.hypot(*travel) > 0.5 else perceived)
+    body = np.where(np.isnan(perceived), ref, perceived)
+    body = np.where(np.cos(body - ref) < 0.0, body + np.pi, body)
+    # the detector's orientation noise, moved ahead to the front axle (paths.py), made
+    # a turning car's target speed jitter by 0.25 m/s (its profile by 3 m/s)
+    body = smooth(grid, np.unwrap(body)[:, None])[:, 0]
+    return _Motion(xy, speed, heading, body)
 
 
 __all__ = ["SUB_TYPES", "Track", "build_tracks", "measured", "smooth", "two_sided", "undo_alpha_beta"]
