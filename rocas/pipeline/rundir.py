@@ -206,7 +206,7 @@ def _state_problem(state: Any) -> str | None:
     unknown = sorted(set(state["done"]) - set(PHASES))
     if unknown:
         return f"is not a rocas run state (unknown phase {unknown[0]!r})"
-    for key, value in state.config.items():
+    for key, value in state["config"].items():
         if not isinstance(value, bool | int | float | str | type(None)):
             return f"has a setting {key!r} that is not a number or text"
     for table in ("timings_s", "evaluations"):

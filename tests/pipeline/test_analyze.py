@@ -2,12 +2,13 @@
 accuracy over the catalog is measured by `rocas bench`)."""
 
 import json
+from pathlib import Path
 from dataclasses import replace
 
 import pytest
 
 from rocas.errors import OutputError, UsageError
-from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
+from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze as _analyze
 from rocas.pipeline.validation import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
 from rocas.search import LocalExecutor, SerialExecutor
@@ -15,6 +16,11 @@ from rocas.search import LocalExecutor, SerialExecutor
 CFG = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=4)
 REPORT_KEYS = {"verdict", "accident", "triggering_entity", "deviating_module", "misconfiguration",
                "validation", "evaluations", "timings_s"}
+
+
+def analyze(*args, **kwargs):
+    """The analysis's report as its report.json object (the shape these tests read)."""
+    return _analyze(*args, **kwargs).to_json()
 
 
 def _stable(report):
@@ -30,6 +36,25 @@ def red_truck():
 def serial_run(red_truck, tmp_path_factory):
     out = tmp_path_factory.mktemp("serial") / "run"
     return out, analyze(red_truck, out, CFG, executor=SerialExecutor())
+
+
+def test_report_json_is_the_same_bytes_as_before_the_results_were_typed(serial_run):
+    """data/red_truck/report.json was written, with these settings, by rocas before the phase
+    results were typed; only the timings differ from run to run."""
+    out, _ = serial_run
+    stored = (Path(__file__).parent / "data" / "red_truck" / "report.json").read_text()
+    fresh = json.loads((out / "report.json").read_text())
+    fresh["timings_s"] = json.loads(stored)["timings_s"]
+    assert json.dumps(fresh, indent=2) == stored
+
+
+def test_state_json_reads_back_as_the_phases_typed_results(serial_run):
+    from rocas.pipeline.rundir import read_state
+
+    out, _ = serial_run
+    state = read_state(out)
+    assert list(state.results) == ["replay", "physical", "diff", "confidence", "cyber", "validation"]
+    assert state.to_json() == json.loads((out / "state.json").read_text())
 
 
 def test_report_has_the_documented_keys_and_files(serial_run):

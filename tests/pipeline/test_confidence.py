@@ -275,7 +275,7 @@ def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_sh
     cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=0, batch_size=8)
     out = tmp_path / "run"
     report = analyze(red_truck, out, cfg, executor=SerialExecutor(),
-                     progress=lambda phase, info: events.append(phase))
+                     progress=lambda phase, info: events.append(phase)).to_json()
     assert events.count("substitution") == 1
     assert events.index("substitution") < events.index("physical")
     confidence = json.loads((out / "state.json").read_text())["done"]["confidence"]
