@@ -258,7 +258,7 @@ def test_temporaries_a_killed_run_left_are_debris(red_truck, serial_run, tmp_pat
     out.mkdir()
     (out / ".accident.mcap.x1y2z3.part").write_bytes(b"half")
     state = prepare_run_dir(out, False, "label", CFG, "digest")
-    assert state["done"] == {} and list(out.iterdir()) == []
+    assert state.results == {} and list(out.iterdir()) == []
     # ... and resumed later: the temporary goes, the run goes on
     src, serial = serial_run
     shutil.copytree(src, tmp_path / "run")
@@ -367,6 +367,7 @@ def test_the_report_prints_hostile_names_literally(serial_run):
     from rocas._text import printable
     from rocas.cli.analyze import render
     from rocas.cli.console import Env
+    from rocas.pipeline.report import Report
 
     out, report = serial_run
     hostile = json.loads(json.dumps(report))
@@ -375,7 +376,7 @@ def test_the_report_prints_hostile_names_literally(serial_run):
     hostile["explanation"] = f"{hostile['explanation']} {MARKUP} {SPOOF}"
     hostile["warnings"] = [f"channel {TOPIC} [bold]"]
     stdout = io.StringIO()
-    render(hostile, out, Env(stdout=stdout, stderr=io.StringIO()))
+    render(Report.from_json(hostile), out, Env(stdout=stdout, stderr=io.StringIO()))
     text = stdout.getvalue()
     assert "\x1b" not in text and "\r" not in text
     assert f"{printable(SPOOF)}   walk: {printable(TOPIC)} -> {MARKUP}" in text
