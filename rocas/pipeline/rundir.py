@@ -230,7 +230,8 @@ def state_from_json(out: Path, state: Any) -> RunState:
         try:
             results[phase] = RESULT_TYPES[phase].from_json(data)
         except ShapeError as exc:
-            raise damaged(out, "state.json", f"has a result of phase {phase!r} whose {exc}") from None
+            part = f"whose {exc.where}" if exc.where else "that"
+            raise damaged(out, "state.json", f"has a result of phase {phase!r} {part} {exc.why}") from None
     return RunState(state["source"], state["config"], state.get("source_sha256"), results,
                     state["timings_s"], state["evaluations"])
 
