@@ -2,13 +2,14 @@
 accuracy over the catalog is measured by `rocas bench`)."""
 
 import json
-from pathlib import Path
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from rocas.errors import OutputError, UsageError
-from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze as _analyze
+from rocas.pipeline import VERDICTS, AnalyzeConfig
+from rocas.pipeline import analyze as _analyze
 from rocas.pipeline.validation import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
 from rocas.search import LocalExecutor, SerialExecutor

@@ -9,7 +9,7 @@ import pytest
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.evaluate import VariantTask, run_batch
 from rocas.pipeline.replay_phase import phase_replay
-from rocas.pipeline.rundir import Run, noop, RunState
+from rocas.pipeline.rundir import Run, RunState, noop
 from rocas.scenarios import load_example
 from rocas.search import SerialExecutor
 

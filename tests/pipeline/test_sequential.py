@@ -8,7 +8,8 @@ import shutil
 import pytest
 
 import rocas.pipeline.sequential as sequential
-from rocas.pipeline import AnalyzeConfig, analyze as _analyze
+from rocas.pipeline import AnalyzeConfig
+from rocas.pipeline import analyze as _analyze
 from rocas.pipeline.sequential import looks, regression_test, sign_test
 from rocas.scenarios import load_example
 from rocas.search import SerialExecutor

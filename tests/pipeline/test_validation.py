@@ -6,9 +6,10 @@ import json
 
 import pytest
 
-from rocas.pipeline import AnalyzeConfig, analyze as _analyze
-from rocas.pipeline.results import RobustFix, StrongerValue
+from rocas.pipeline import AnalyzeConfig
+from rocas.pipeline import analyze as _analyze
 from rocas.pipeline.cyber import cyber_space
+from rocas.pipeline.results import RobustFix, StrongerValue
 from rocas.pipeline.validation import (
     ROBUST_TOLERANCE,
     STRONGER_FRACTIONS,
