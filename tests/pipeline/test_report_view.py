@@ -1,7 +1,9 @@
 """The report is one view model rendered three ways, and report.json keeps its bytes: the
 fixtures in data/ were written by rocas before the phase results were typed (report.json,
 report.md, and the terminal view of ``rocas analyze``) for catalog entries A1, A6 (the walk
-went on past a module substitution cleared), A7 (no configuration fix), A9 (the walk passed
+went on past a module substitution cleared, then the fix was found in the module reading
+the walk's: a06_validated, with the default 200 variants, also a sequential stop and a robust
+value), A7 (no configuration fix), A9 (the walk passed
 over entries) and the roundabout example at small budgets."""
 
 from __future__ import annotations
