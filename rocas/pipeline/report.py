@@ -369,8 +369,12 @@ def change_text(name: str, original: Any, mutated: Any, arrow: str = "→") -> s
     return f"{name} {_fmt(original)} {arrow} {_fmt(mutated)}"
 
 
-def change(item: PropertyChange | ParameterChange, arrow: str = "→") -> str:
-    """"name original → mutated" for a triggering property or a misconfigured parameter."""
+def change(item: PropertyChange | ParameterChange | Mapping[str, Any], arrow: str = "→") -> str:
+    """"name original → mutated" for a triggering property or a misconfigured parameter (or
+    one as report.json gives it: ``rocas bench`` prints its rows)."""
+    if isinstance(item, Mapping):
+        return change_text(item.get("parameter", item.get("name")), item["original"], item["mutated"],
+                           arrow)
     name = item.parameter if isinstance(item, ParameterChange) else item.name
     return change_text(name, item.original, item.mutated, arrow)
 
