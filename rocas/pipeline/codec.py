@@ -100,7 +100,7 @@ def from_json(tp: type[T] | Any, data: Any, where: str = "") -> T:
         if more and more != [Ellipsis]:
             raise TypeError(f"fixed-length tuples are not supported: {tp}")
         return tuple(from_json(item, v, f"{where}[{i}]") for i, v in enumerate(data))  # type: ignore[return-value]
-    if origin in (Mapping, dict, typing.Mapping):  # noqa: UP006
+    if origin in (Mapping, dict):
         _, value_type = typing.get_args(tp)
         if not isinstance(data, dict):
             raise ShapeError(where, "is not an object")

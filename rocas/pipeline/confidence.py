@@ -2,7 +2,7 @@
 independent method agree?
 
 Algorithm 1's answer depends on the reference execution the physical phase chose. The phase
-records the accident-free candidates in the order of its rule (``physical["front"]``); this
+records the accident-free candidates in the order of its rule (``PhysicalResult.front``); this
 phase diffs the accident against the best few *other* references (each changing other
 properties than the chosen one, so that each is an independent view of the accident) and counts
 how many name the same module. It also asks module substitution
