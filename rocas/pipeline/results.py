@@ -532,6 +532,10 @@ class ValidationResult(JsonCodec):
     simulations_without_stopping: int
 
 
+#: a phase's result
+PhaseResult = (ReplayResult | PhysicalResult | DiffPhaseResult | ConfidenceResult | CyberResult
+               | ValidationResult)
+
 #: the result type of each phase, in phase order
 RESULT_TYPES: dict[str, type] = {t.PHASE: t for t in (  # type: ignore[attr-defined]
     ReplayResult, PhysicalResult, DiffPhaseResult, ConfidenceResult, CyberResult,

@@ -29,8 +29,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-import numpy as np
-
 from rocas._fs import check_writable, is_temporary, write_text_atomic
 from rocas.errors import InputError, OutputError, UsageError
 from rocas.pipeline.codec import ShapeError
@@ -41,6 +39,7 @@ from rocas.pipeline.results import (
     RESULT_TYPES,
     Answer,
     DiffPhaseResult,
+    PhaseResult,
     current_answer,
     revisions_of,
 )
@@ -72,7 +71,7 @@ class RunState:
     source: str
     config: dict[str, Any]
     source_sha256: str | None = None
-    results: dict[str, Any] = field(default_factory=dict)
+    results: dict[str, PhaseResult] = field(default_factory=dict)
     timings_s: dict[str, float] = field(default_factory=dict)
     evaluations: dict[str, int] = field(default_factory=dict)
 
@@ -142,21 +141,13 @@ class Run:
         """The current answer: the diff phase's with the later phases' revisions applied."""
         return current_answer(self.result(DiffPhaseResult), revisions_of(self.state.results))
 
-    def finish(self, result: Any, seconds: float, evaluations: int = 0) -> None:
+    def finish(self, result: PhaseResult, seconds: float, evaluations: int = 0) -> None:
+        """Record ``result`` as its phase's, with its time [s] and simulations, in state.json."""
         phase = result.PHASE
         self.state.results[phase] = result
         self.state.timings_s[phase] = round(seconds, 3)
         self.state.evaluations[phase] = evaluations
         self.save()
-
-
-def jsonable(x: Any) -> Any:
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(type(x).__name__)
-
 
 
 def source_identity(source: str | os.PathLike[str] | Scenario) -> tuple[str, str]:
