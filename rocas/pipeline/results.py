@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from rocas.pipeline.codec import Json, from_json, omitted, to_json
+from rocas.pipeline.codec import Json, ShapeError, from_json, omitted, to_json
 
 
 class JsonCodec:
@@ -253,6 +253,10 @@ class ModuleRevision(JsonCodec):
     warnings: tuple[str, ...] | None = omitted()
     reads_named: bool = False
 
+    def __post_init__(self) -> None:
+        if self.reason not in REVISION_REASONS:
+            raise ShapeError("reason", f"is not one of {', '.join(REVISION_REASONS)}")
+
 
 @dataclass(frozen=True)
 class Answer:
@@ -290,7 +294,7 @@ def revised(answer: Answer, revision: ModuleRevision) -> Answer:
         return dataclasses.replace(answer, deviating_module=revision.after, path=(),
                                    walk_named=revision.before,
                                    suspect_reads_named=revision.reads_named)
-    raise ValueError(f"unknown revision reason {revision.reason!r}")
+    raise AssertionError(revision.reason)  # refused on construction
 
 
 def current_answer(diff: DiffPhaseResult, revisions: Sequence[ModuleRevision] = ()) -> Answer:
@@ -320,11 +324,6 @@ class ReferenceAnswer(JsonCodec):
     entries_passed: Mapping[str, float] | None = omitted()
     cleared_passed: tuple[str, ...] | None = omitted()
     window_passed: str | None = omitted()
-
-    @property
-    def passed(self) -> bool:
-        """Whether the walk passed over departures (entries, cleared modules, the window)."""
-        return bool(self.entries_passed or self.cleared_passed or self.window_passed)
 
 
 @dataclass(frozen=True)

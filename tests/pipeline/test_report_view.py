@@ -88,3 +88,9 @@ def test_a_revision_round_trips_through_json():
     rev = ModuleRevision(by="confidence", reason="walk_passed", before="a", after="b", path=("x",),
                          entries_passed={"/t": 1.5})
     assert ModuleRevision.from_json(json.loads(json.dumps(rev.to_json()))) == rev
+
+
+def test_a_revision_for_an_unknown_reason_is_a_shape_error():
+    with pytest.raises(ShapeError, match="reason is not one of"):
+        ModuleRevision.from_json({"by": "cyber", "reason": "hunch", "before": "a", "after": "b",
+                                  "path": []})
