@@ -123,7 +123,7 @@ def _analyse_one(item: CampaignInput, out: Path, cfg: AnalyzeConfig, ex: Executo
         if report is None:
             report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists(),
                              progress=lambda phase, info: progress(k, n, item.name, phase, info),
-                             executor=ex)
+                             executor=ex).to_json()  # the report.json a finished run holds
     except RocasError as exc:
         return {**row, "error": str(exc).splitlines()[0]}
     except (KeyboardInterrupt, MemoryError):

@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rocas._fs import check_parent_exists, check_writable, safe_component
 from rocas._json import dumps as json_dumps
 from rocas.cli.console import Env, safe
 from rocas.cli.exit_codes import ExitStatus
+
+if TYPE_CHECKING:
+    from rocas.pipeline.report import Report
 
 HELP = "find the triggering entity, the deviating module and the misconfiguration of an accident"
 
@@ -159,12 +162,12 @@ def run(args: argparse.Namespace, env: Env) -> int:
         if executor is not None:
             executor.close()
     if args.json:
-        env.stdout.write(json_dumps(report, indent=2) + "\n")
+        env.stdout.write(json_dumps(report.to_json(), indent=2) + "\n")
     else:
         render(report, out, env)
         if args.rrd:
             env.out().print(f"Rerun recording: {safe(args.rrd)}")
-    return ExitStatus.NOT_REPRODUCED if report["verdict"] == "not_reproduced" else ExitStatus.SUCCESS
+    return ExitStatus.NOT_REPRODUCED if report.verdict == "not_reproduced" else ExitStatus.SUCCESS
 
 
 def remove_run_dir(out: Path) -> None:
@@ -224,11 +227,9 @@ def _use_stack_file(path: str, source: Any, out: Path) -> str:
 def kept_after_interrupt(out: Path, rrd: str | None) -> str:
     """What an interrupted ``rocas analyze`` left in ``out``, read from the disk: the
     interrupt message's part in parentheses."""
-    try:
-        state = json.loads((out / "state.json").read_text(encoding="utf-8"))
-        done = list(state["done"])
-    except (OSError, ValueError, KeyError, TypeError):
-        done = []
+    from rocas.pipeline.rundir import finished_phases
+
+    done = finished_phases(out)
     if (out / "report.json").exists() and done:
         # the analysis had finished (or had been resumed to its end): only the .rrd is missing
         return (f"the analysis is complete in {out} (report.json)"
@@ -244,7 +245,7 @@ def kept_after_interrupt(out: Path, rrd: str | None) -> str:
     return f"{' and '.join(kept)} are kept in {out}; continue with --resume"
 
 
-def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
+def _write_rrd(path: str, out: Path, report: Report) -> None:
     try:
         from rocas.viz.analysis import write_run_dir_rrd  # the full debugger layout
     except ImportError:
@@ -257,7 +258,7 @@ def _write_rrd(path: str, out: Path, report: dict[str, Any]) -> None:
 
     if (out / "reference.mcap").exists():
         write_diff_rrd(diff(out / "accident.mcap", out / "reference.mcap",
-                            delta_s=(report.get("settings") or {}).get("delta_s", 3.0)), path)
+                            delta_s=report.settings.delta_s), path)
 
 
 class _Quiet:
@@ -367,27 +368,11 @@ class _Progress:
             self._p.update(task, info=safe(", ".join(f"{k} {v}" for k, v in info.items())))
 
 
-def render(report: dict[str, Any], out: Path, env: Env) -> None:
-    """A report in the shape of one row of the paper's Table 4."""
+def render(report: Report, out: Path, env: Env) -> None:
+    """A report in the shape of one row of the paper's Table 4, and its explanation."""
     from rich.panel import Panel
     from rich.table import Table
 
-    from rocas.pipeline.report import (
-        accident_text,
-        change,
-        cleared_passed_text,
-        confidence_text,
-        entries_passed_text,
-        other_fix_text,
-        regression_text,
-        replay_text,
-        robust_text,
-        settings_text,
-        sweep_text,
-        walk_named_text,
-    )
-
-    con = env.out()
     t = Table(show_header=False, box=None, padding=(0, 1))
     t.add_column(style="bold")
     t.add_column()
@@ -395,58 +380,87 @@ def render(report: dict[str, Any], out: Path, env: Env) -> None:
     def row(label: str, text: str, markup: str = "") -> None:
         t.add_row(label, safe(text) + markup)  # names from data print as they read
 
-    acc = report["accident"]
-    row("verdict", report["verdict"].replace("_", " ")
-              + ("" if report.get("complete", True) else "  (from less than the whole recording)"))
-    for w in report.get("warnings", []):
+    _render_facts(report, row)
+    _render_answer(report, row)
+    _render_fixes(report, row)
+    _render_costs(report, out, row)
+    con = env.out()
+    con.print(t)
+    con.print(Panel(safe(report.explanation), title="why", expand=False))
+
+
+Row = Callable[..., None]
+
+
+def _render_facts(report: Report, row: Row) -> None:
+    """The verdict, the warnings, the replay and the accident."""
+    from rocas.pipeline.report import accident_text, replay_text
+
+    row("verdict", report.verdict.replace("_", " ")
+        + ("" if report.complete else "  (from less than the whole recording)"))
+    for w in report.warnings:
         row("warning", w)
-    if report.get("replay"):
+    if report.replay:
         row("replay", replay_text(report))
-    if acc:
-        row("accident", accident_text(acc))
-    trig = report["triggering_entity"]
+    if report.accident:
+        row("accident", accident_text(report.accident))
+
+
+def _render_answer(report: Report, row: Row) -> None:
+    """The triggering entity, the deviating module with its walk (and why the walk ended
+    where it did) and the confidence."""
+    from rocas.pipeline.report import change, confidence_text, walk_notes
+
+    trig = report.triggering_entity
     if trig:
-        for p in trig["properties"]:
-            row("triggering entity", f"{trig['entity']} ({trig['kind']}): {change(p, '->')}")
-    if report["deviating_module"]:
-        walk = " -> ".join(report["path"]) or "-"
-        row("deviating module", f"{report['deviating_module']}   walk: {walk}")
-        if report.get("walk_fallback"):
-            row("", f"({report['walk_fallback']})")
-        if report.get("entries_passed"):
-            row("", f"({entries_passed_text(report)})")
-        if report.get("cleared_passed"):
-            row("", f"({cleared_passed_text(report)})")
-        if report.get("window_passed"):
-            row("", f"({report['window_passed']})")
-        if report.get("walk_named"):
-            row("", f"({walk_named_text(report)})")
-    if report.get("confidence"):
+        for p in trig.properties:
+            row("triggering entity", f"{trig.entity} ({trig.kind}): {change(p, '->')}")
+    if report.deviating_module:
+        walk = " -> ".join(report.path) or "-"
+        row("deviating module", f"{report.deviating_module}   walk: {walk}")
+        for text in walk_notes(report):
+            row("", f"({text})")
+    if report.confidence:
         row("confidence", confidence_text(report))
-    for m in report["misconfiguration"]:
+
+
+def _render_fixes(report: Report, row: Row) -> None:
+    """The misconfiguration, the other fixes, the validation and the robust value."""
+    from rocas.pipeline.report import (
+        change,
+        other_fix_text,
+        regression_text,
+        robust_text,
+        sweep_text,
+        validation_text,
+    )
+
+    for m in report.misconfiguration:
         row("misconfiguration", change(m, "->"))
-    for alt in report.get("alternatives", []):
-        row("nearly as small", ", ".join(change(m, "->") for m in alt["misconfiguration"])
-                  + f"  (h2 {alt['h2']:.4g})")
-    for fix in report.get("other_fixes", []):
+    for alt in report.alternatives:
+        row("nearly as small", ", ".join(change(m, "->") for m in alt.misconfiguration)
+            + f"  (h2 {alt.h2:.4g})")
+    for fix in report.other_fixes:
         row("larger fix", other_fix_text(fix, "->"))
-    v = report["validation"]
-    if v and v["variants"]:
-        orig, fixed = 100 * v["success_rate_original"], 100 * v["success_rate_fixed"]
-        row("validation", f"{v['variants']} variants: accident-free {orig:.0f} % "
+    v = report.validation
+    if v and v.variants:
+        orig, fixed = validation_text(v)
+        row("validation", f"{v.variants} variants: accident-free {orig:.0f} % "
             f"(original) vs {fixed:.0f} % (fixed)"
             + (f"; {regression_text(v)}" if regression_text(v) else ""),
-            "  [red]fix makes it worse[/red]" if v["fix_makes_it_worse"] else "")
-        row("robust value", robust_text(report, "->")
-                  + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
-    ss = report["search_space"]
-    if ss["parameters_searched"]:
-        row("search space", f"{ss['parameters_searched']} of {ss['parameters_total']} parameters "
-                  f"({100 * (ss['reduction'] or 0):.1f} % reduction)")
-    row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report["timings_s"].items()))
-    row("simulations", ", ".join(f"{k} {n}" for k, n in report["evaluations"].items()))
-    if report.get("settings"):
-        row("settings", settings_text(report))
+            "  [red]fix makes it worse[/red]" if v.fix_makes_it_worse else "")
+        row("robust value", robust_text(report, "->") + (f"; {sweep_text(v)}" if sweep_text(v) else ""))
+
+
+def _render_costs(report: Report, out: Path, row: Row) -> None:
+    """The search space, the time and simulations per phase, the settings, the run directory."""
+    from rocas.pipeline.report import settings_text
+
+    ss = report.search_space
+    if ss.parameters_searched:
+        row("search space", f"{ss.parameters_searched} of {ss.parameters_total} parameters "
+            f"({100 * (ss.reduction or 0):.1f} % reduction)")
+    row("time", ", ".join(f"{k} {s:.1f} s" for k, s in report.timings_s.items()))
+    row("simulations", ", ".join(f"{k} {n}" for k, n in report.evaluations.items()))
+    row("settings", settings_text(report))
     row("run directory", str(out))
-    con.print(t)
-    con.print(Panel(safe(report["explanation"]), title="why", expand=False))

@@ -2,5 +2,6 @@
 
 from rocas.pipeline.analyze import analyze
 from rocas.pipeline.config import PHASES, VERDICTS, AnalyzeConfig
+from rocas.pipeline.report import Report
 
-__all__ = ["PHASES", "VERDICTS", "AnalyzeConfig", "analyze"]
+__all__ = ["PHASES", "VERDICTS", "AnalyzeConfig", "Report", "analyze"]

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 from rocas._lock import locked_directory
 from rocas.pipeline.confidence import phase_confidence, start_second_opinion
@@ -24,10 +24,11 @@ from rocas.pipeline.cyber_phase import phase_cyber, start_screening
 from rocas.pipeline.diff_phase import phase_diff
 from rocas.pipeline.physical_phase import phase_physical
 from rocas.pipeline.replay_phase import phase_replay
-from rocas.pipeline.report import build_report, write_report
+from rocas.pipeline.report import Report, build_report, write_report
 from rocas.pipeline.rundir import (
     Progress,
     Run,
+    RunState,
     damaged,
     noop,
     prepare_run_dir,
@@ -47,8 +48,9 @@ def analyze(
     resume: bool = False,
     progress: Progress = noop,
     executor: Executor | None = None,
-) -> dict[str, Any]:
-    """Run (or resume) the whole analysis; returns the report object (``--json``).
+) -> Report:
+    """Run (or resume) the whole analysis; returns the report (``report.to_json()`` is the
+    ``--json`` object).
 
     Args:
         source: an accident recording (replayed) or a Scenario (simulated as the accident).
@@ -67,7 +69,7 @@ def analyze(
     ex = executor if executor is not None else make_executor(cfg.executor, cfg.workers)
     # the folders this call makes: removed again if nothing was finished in them
     made = [d for d in (out, *out.parents) if not d.exists()]
-    state: dict[str, Any] = {"done": {}}
+    state: RunState | None = None
     try:
         with contextlib.ExitStack() as lock:
             held = out.is_dir()
@@ -77,7 +79,7 @@ def analyze(
             if not held:  # made just now
                 lock.enter_context(locked_directory(out))
             _warm_up(ex, cfg)
-            resumed = bool(state["done"])
+            resumed = bool(state.results)
             try:
                 return _analyze(Run(out, cfg, ex, progress, state), scenario, recording)
             except (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError) as exc:
@@ -90,7 +92,7 @@ def analyze(
     except BaseException:
         if own:  # an interruption or an error: end the workers without waiting for their tasks
             getattr(ex, "abort", ex.close)()
-        if not state["done"]:  # the run's state, which each finished phase adds to
+        if state is None or not state.results:  # the run's state, which each finished phase adds to
             remove_if_empty(made)
         raise
     finally:
@@ -125,39 +127,40 @@ def uses_workers(executor: Executor, cfg: AnalyzeConfig) -> bool:
                                 or 2 * cfg.validation_variants >= workers * PARALLEL_MIN_BATCH)
 
 
-def answer_text(run: Run, fix: dict[str, float], module: str | None) -> str:
+def answer_text(run: Run, fix: Mapping[str, float], module: str | None) -> str:
     """The misconfiguration found, in words, before phase V checks it ("name original -> fix")."""
     space = run.cyber_space(module)
     return ", ".join(f"{name} {float(space.variable(name).original):.4g} -> {value:.4g}"  # type: ignore[arg-type]
                      for name, value in sorted(fix.items()))
 
 
-def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> dict[str, Any]:
+def _analyze(run: Run, scenario: Scenario | None, recording: Path | None) -> Report:
+    """The phases in order, each reading its predecessors' results; the report's verdict is
+    the phase the analysis stopped after."""
     run.progress("replay", {})
-    phase_replay(run, scenario, recording)
-    replay = run.state["done"]["replay"]
-    if not replay["reproduced"] or run.accident is None:
-        return write_report(run.out, build_report(run.state, run.accident, "not_reproduced"))
+    replay = phase_replay(run, scenario, recording)
+    if not replay.reproduced or run.accident is None:
+        return _finish(run, "not_reproduced")
     if uses_workers(run.executor, run.cfg) or max(1, getattr(run.executor, "workers", 1)) == 1:
         start_second_opinion(run)  # needs only the accident: on a worker while phase II runs
-    physical = phase_physical(run)
-    if "chosen" not in physical:
-        return write_report(run.out, build_report(run.state, run.accident, "no_reference"))
+    if phase_physical(run).chosen is None:
+        return _finish(run, "no_reference")
     run.progress("diff", {})
-    phase_diff(run)
+    diff = phase_diff(run)
     # the screening of the diff's module runs on a worker while the confidence phase runs here
-    start_screening(run, run.state["done"]["diff"]["deviating_module"])
+    start_screening(run, diff.deviating_module)
     run.progress("confidence", {})
-    phase_confidence(run)  # may adopt the references' majority: read the diff's summary after it
-    diff = run.state["done"]["diff"]
-    cyber = phase_cyber(run, diff["deviating_module"])
-    diff = run.state["done"]["diff"]  # the second suspect's module when its fix is reported
-    if "fix" not in cyber:
-        return write_report(run.out, build_report(run.state, run.accident, "no_configuration_fix"))
+    phase_confidence(run)  # may revise the diff's module: the current answer is read after it
+    cyber = phase_cyber(run, run.answer().deviating_module)
+    if cyber.fix is None:
+        return _finish(run, "no_configuration_fix")
+    module = run.answer().deviating_module  # the second suspect's when its fix is reported
     if not run.done("validation"):
-        run.progress("answer", {"module": diff["deviating_module"], "fix": answer_text(run, cyber["fix"],
-                                                                                   diff["deviating_module"])})
-    phase_validation(run, cyber["fix"], diff["deviating_module"])
-    return write_report(run.out, build_report(run.state, run.accident, "misconfiguration"))
+        run.progress("answer", {"module": module, "fix": answer_text(run, cyber.fix, module)})
+    phase_validation(run, cyber.fix, module)
+    return _finish(run, "misconfiguration")
 
 
+def _finish(run: Run, verdict: str) -> Report:
+    """Build the report from the finished phases' results and write report.json/report.md."""
+    return write_report(run.out, build_report(run.state, run.accident, verdict))

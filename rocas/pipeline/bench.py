@@ -122,6 +122,12 @@ def recording_for(key: str, directory: Path) -> Path | None:
     return hits[0] if hits else None
 
 
+def _analyze(source: Any, out: Path, cfg: AnalyzeConfig) -> dict[str, Any]:
+    """An analysis (resumed when ``out`` holds one) as its report.json object, which the
+    bench scores."""
+    return analyze(source, out, cfg, resume=(out / "state.json").exists()).to_json()
+
+
 def run_bench(
     ids: Sequence[str] | None,
     out: Path,
@@ -135,19 +141,45 @@ def run_bench(
 ) -> dict[str, Any]:
     """Analyze catalog entries of ``stack``'s catalog and score them; returns the ``--json``
     object."""
-    from rocas.catalog import entries, entry, generate_instances
+    from rocas.catalog import entries, entry
 
     chosen = [entry(i, stack) for i in ids] if ids else list(entries(stack))
     if not chosen:
         raise UsageError("the catalog is empty")
     out.mkdir(parents=True, exist_ok=True)
+    rows, reports = _score_entries(chosen, out, cfg, recordings, progress)
+    totals: dict[str, float] = {}
+    for r in rows:
+        for k, v in r["timings_s"].items():
+            totals[k] = totals.get(k, 0.0) + v
+    whole = sum(totals.values()) or 1.0
+    reductions = [r["search_space"]["reduction"] for r in rows if r["search_space"]["reduction"] is not None]
+    return {
+        "stack": stack,
+        "entries": rows,
+        "hits": sum(r["hit"] for r in rows),
+        "total": len(rows),
+        "agreement": agreement_summary(rows),
+        "time_breakdown": {k: round(v / whole, 4) for k, v in totals.items()},
+        "time_total_s": round(whole, 2),
+        "search_space_reduction_mean": sum(reductions) / len(reductions) if reductions else None,
+        "scope_comparison": _compare_scopes(chosen, rows, reports, out, cfg, recordings,
+                                            compare_scope, progress),
+        "instances": _instances(chosen, out, cfg, instances, progress) if instances else [],
+    }
+
+
+def _score_entries(chosen: Sequence[Any], out: Path, cfg: AnalyzeConfig, recordings: Path,
+                   progress: Callable[[str], None]
+                   ) -> tuple[list[dict[str, Any]], dict[str, dict[str, Any]]]:
+    """Analyze each entry (its recording, or its scenario simulated) and score it against its
+    ground truth: the rows of the table, and each entry's report (by key)."""
     rows: list[dict[str, Any]] = []
     reports: dict[str, dict[str, Any]] = {}
     for e in chosen:
         rec = recording_for(e.key, recordings)
-        source: Any = rec if rec is not None else e.scenario
         progress(f"{e.id}: analyze {rec or e.key + ' (simulated)'}")
-        report = analyze(source, out / e.key, cfg, resume=(out / e.key / "state.json").exists())
+        report = _analyze(rec if rec is not None else e.scenario, out / e.key, cfg)
         # the phases' own times, which a resumed run keeps (its wall time would be the resume's)
         seconds = sum(report["timings_s"].values())
         reports[e.key] = report
@@ -160,14 +192,15 @@ def run_bench(
                      "first_fix_evaluation": report.get("first_fix_evaluation"),
                      "first_fix_batch_evaluations": report.get("first_fix_batch_evaluations"),
                      "confidence": _confidence(report)})
+    return rows, reports
 
-    totals: dict[str, float] = {}
-    for r in rows:
-        for k, v in r["timings_s"].items():
-            totals[k] = totals.get(k, 0.0) + v
-    whole = sum(totals.values()) or 1.0
-    reductions = [r["search_space"]["reduction"] for r in rows if r["search_space"]["reduction"] is not None]
 
+def _compare_scopes(chosen: Sequence[Any], rows: list[dict[str, Any]],
+                    reports: dict[str, dict[str, Any]], out: Path, cfg: AnalyzeConfig,
+                    recordings: Path, compare_scope: int, progress: Callable[[str], None]
+                    ) -> list[dict[str, Any]]:
+    """The first ``compare_scope`` fixable entries whose module was found, analysed again with
+    each cyber search of _COMPARED (without validation: what is compared is the search)."""
     comparison = []
     fixable = [r for r in rows if r["expected"]["verdict"] == "misconfiguration"
                and r["found"]["deviating_module"]][:compare_scope]
@@ -181,42 +214,33 @@ def run_bench(
             label = f"--scope {scope}" + ("" if screening else " --no-screening")
             progress(f"{e.id}: {label}")
             sub = out / f"{e.key}.{scope}{'' if screening else '.plain'}"
-            # what is compared is the cyber search; the validation would only repeat the entry's
-            rep = analyze(rec if rec is not None else e.scenario, sub,
-                          replace(cfg, scope=scope, screening=screening, validation_variants=0),
-                          resume=(sub / "state.json").exists())
+            rep = _analyze(rec if rec is not None else e.scenario, sub,
+                           replace(cfg, scope=scope, screening=screening, validation_variants=0))
             fnd = _found(rep)
             runs[(scope, screening)] = _scope_run(rep, fnd, score(r["expected"], fnd))
         comparison.append({"id": r["id"], "module": runs[("module", True)], "all": runs[("all", True)],
                            "plain": {"module": runs[("module", False)], "all": runs[("all", False)]}})
+    return comparison
+
+
+def _instances(chosen: Sequence[Any], out: Path, cfg: AnalyzeConfig, instances: int,
+               progress: Callable[[str], None]) -> list[dict[str, Any]]:
+    """Per entry, ``instances`` generated variants analysed and scored (accuracy per type)."""
+    from rocas.catalog import generate_instances
 
     per_type = []
-    if instances:
-        for e in chosen:
-            inst = generate_instances(e, instances, seed=cfg.seed)
-            hits = 0
-            for k, (seed, scenario) in enumerate(inst.instances):
-                progress(f"{e.id}: instance {k + 1}/{len(inst.instances)}")
-                rep = analyze(scenario, out / "instances" / f"{e.key}_{seed}", cfg,
-                              resume=(out / "instances" / f"{e.key}_{seed}" / "state.json").exists())
-                hits += score(_expected(e.truth, replayed=False), _found(rep))["hit"]
-            per_type.append({"type": e.id, "tried": inst.tried, "crashed": inst.crashed,
-                             "fixable": e.truth.fixable, "fix_holds": inst.fix_holds,
-                             "analyzed": len(inst.instances), "hits": hits,
-                             "accuracy": hits / len(inst.instances) if inst.instances else None})
-
-    return {
-        "stack": stack,
-        "entries": rows,
-        "hits": sum(r["hit"] for r in rows),
-        "total": len(rows),
-        "agreement": agreement_summary(rows),
-        "time_breakdown": {k: round(v / whole, 4) for k, v in totals.items()},
-        "time_total_s": round(whole, 2),
-        "search_space_reduction_mean": sum(reductions) / len(reductions) if reductions else None,
-        "scope_comparison": comparison,
-        "instances": per_type,
-    }
+    for e in chosen:
+        inst = generate_instances(e, instances, seed=cfg.seed)
+        hits = 0
+        for k, (seed, scenario) in enumerate(inst.instances):
+            progress(f"{e.id}: instance {k + 1}/{len(inst.instances)}")
+            rep = _analyze(scenario, out / "instances" / f"{e.key}_{seed}", cfg)
+            hits += score(_expected(e.truth, replayed=False), _found(rep))["hit"]
+        per_type.append({"type": e.id, "tried": inst.tried, "crashed": inst.crashed,
+                         "fixable": e.truth.fixable, "fix_holds": inst.fix_holds,
+                         "analyzed": len(inst.instances), "hits": hits,
+                         "accuracy": hits / len(inst.instances) if inst.instances else None})
+    return per_type
 
 
 def run_bench_seeds(

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from rocas.pipeline.results import CandidateRecord, GenerationRecord
 from rocas.search.ga import Candidate, GenerationStats
 from rocas.search.space import Mutation
 
@@ -25,14 +26,18 @@ def gen_info(s: GenerationStats, second: str) -> dict[str, Any]:
             "best_constraint": s.best_constraint, "best_feasible": best, "best_objective": second}
 
 
-def gen_json(s: GenerationStats, second: str) -> dict[str, Any]:
-    return {**gen_info(s, second), "objectives": s.objectives.tolist(),
-            "constraints": s.constraints.tolist()}
+def gen_json(s: GenerationStats, second: str) -> GenerationRecord:
+    """A generation as the run directory keeps it (:func:`gen_info` and every member's
+    objectives and constraints)."""
+    return GenerationRecord(**gen_info(s, second),
+                            objectives=tuple(tuple(row) for row in s.objectives.tolist()),
+                            constraints=tuple(s.constraints.tolist()))
 
 
-def cand_json(c: Candidate) -> dict[str, Any]:
-    return {"mutation": dict(c.mutation.values), "objectives": list(c.objectives),
-            "constraint": c.constraint, "generation": c.generation}
+def cand_json(c: Candidate) -> CandidateRecord:
+    """A search candidate as the run directory keeps it."""
+    return CandidateRecord(mutation=dict(c.mutation.values), objectives=tuple(c.objectives),
+                           constraint=c.constraint, generation=c.generation)
 
 
 

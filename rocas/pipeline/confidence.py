@@ -2,7 +2,7 @@
 independent method agree?
 
 Algorithm 1's answer depends on the reference execution the physical phase chose. The phase
-records the accident-free candidates in the order of its rule (``physical["front"]``); this
+records the accident-free candidates in the order of its rule (``PhysicalResult.front``); this
 phase diffs the accident against the best few *other* references (each changing other
 properties than the chosen one, so that each is an independent view of the accident) and counts
 how many name the same module. It also asks module substitution
@@ -37,6 +37,17 @@ from typing import TYPE_CHECKING, Any
 from rocas._fs import atomic_path, write_text_atomic
 from rocas.pipeline.evaluate import VariantTask, record
 from rocas.pipeline.physical import apply_physical
+from rocas.pipeline.results import (
+    Agreement,
+    ConfidenceResult,
+    DiffPhaseResult,
+    ModuleRevision,
+    PhysicalResult,
+    PropertyChange,
+    ReferenceAnswer,
+    SecondOpinionRecord,
+    TriggeringEntity,
+)
 from rocas.pipeline.rundir import Run
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import submit
@@ -101,68 +112,117 @@ def level(agree: dict[str, Any], stance: str | None, fallback: bool = False) -> 
     return "unstable"
 
 
-def phase_confidence(run: Run) -> dict[str, Any]:
+def phase_confidence(run: Run) -> ConfidenceResult:
     """Diff the accident against alternate references and ask module substitution. Returns
-    the phase's result. When :func:`adopted_answer` picks another reference's answer than the
-    chosen one's, that reference becomes the reference (reference.mcap, diff.json and the diff
-    phase's summary are rewritten for it); otherwise the chosen reference's answer stands."""
+    the phase's result. When the chosen reference's walk went on past departures
+    (:func:`_answer`), or :func:`adopted_answer` picks another reference's answer than the
+    chosen one's (that reference then becomes the reference: reference.mcap and diff.json are
+    rewritten for it), the result holds the revision of the deviating module; otherwise the
+    chosen reference's answer stands."""
     from rocas.analysis.diff import diff
-    from rocas.pipeline.substitution import second_opinion
 
-    if run.done("confidence"):
-        return run.state["done"]["confidence"]
+    done = run.get(ConfidenceResult)
+    if done is not None:
+        return done
     t0 = time.perf_counter()
     scn = run.scenario
     assert scn is not None
-    physical = run.state["done"]["physical"]
-    chosen_diff = run.state["done"]["diff"]
-    alternates = alternate_references(physical.get("front", []), physical["chosen"],
+    physical = run.result(PhysicalResult)
+    chosen_diff = run.result(DiffPhaseResult)
+    assert physical.chosen is not None
+    alternates = alternate_references([{"mutation": c.mutation} for c in physical.front],
+                                      {"mutation": physical.chosen.mutation},
                                       run.cfg.alternate_references)
-    # module substitution needs only the accident: it was started on a worker before phase II
-    # (start_second_opinion); the alternate references are recorded here, all in one batch
-    # (each file is the one its run alone records, at one rollout's fixed cost per tick
-    # instead of one each)
-    started = run.ahead.pop("second_opinion", None)
-    record([(VariantTask(s, (), s.seed), run.out / f"reference_{i}.mcap")
-            for i, s in enumerate((apply_physical(scn, Mutation(dict(cand["mutation"])))
-                                   for cand in alternates), start=1)])
-    opinion = None
-    if wants_second_opinion(run):
-        opinion = started.result() if started is not None else second_opinion(scn)
-    answers = [{"reference": "reference.mcap", "mutation": physical["chosen"]["mutation"],
-                **_answer(chosen_diff, opinion, lambda: diff(
+    opinion = _record_alternates_and_ask(run, scn, alternates)
+    found = {"deviating_module": chosen_diff.deviating_module, "path": list(chosen_diff.path),
+             "fallback": chosen_diff.fallback, "entries": chosen_diff.entries}
+    answers = [{"reference": "reference.mcap", "mutation": physical.chosen.mutation,
+                **_answer(found, opinion, lambda: diff(
                     run.out / "accident.mcap", run.out / "reference.mcap", delta_s=run.cfg.delta_s))}]
-    passed = {k: answers[0][k] for k in _PASSED if answers[0].get(k)}
-    if passed:  # the walk past the entries or a cleared module: the diff's answer now
-        run.state["done"]["diff"] = {
-            **chosen_diff, "deviating_module": answers[0]["module"], "path": answers[0]["path"],
-            "fallback": answers[0]["fallback"], **passed}
     diffs: list[dict[str, Any] | None] = [None]
     for i, cand in enumerate(alternates, start=1):
         result = diff(run.out / "accident.mcap", run.out / f"reference_{i}.mcap",
                       delta_s=run.cfg.delta_s)
-        found = result.to_json()
-        diffs.append(found)
+        diffs.append(result.to_json())
         answers.append({"reference": f"reference_{i}.mcap", "mutation": cand["mutation"],
-                        **_answer(found, opinion, lambda r=result: r)})
-    simulations = len(alternates)
-    result: dict[str, Any] = {"answers": answers}
-    if opinion is not None:
-        simulations += len(opinion.runs) + 1
+                        **_answer(diffs[-1], opinion, lambda r=result: r)})
     adopted = adopted_answer(answers, opinion)
-    if adopted:
-        result["triggering_entity"] = triggering_entity(scn, Mutation(dict(answers[adopted]["mutation"])))
-        _adopt(run, answers[adopted], diffs[adopted])
+    revisions = _revisions(run, chosen_diff, answers, adopted, diffs[adopted])
     agree = agreement([a["module"] for a in answers], adopted)
-    result |= {"agreement": agree, "adopted": adopted}
-    stance = None
+    stance = None if opinion is None else opinion.stance(agree["module"])
+    level_ = level(agree, stance, fallback=bool(answers[adopted].get("fallback")))
+    summary: dict[str, Any] = {"answers": answers, "agreement": agree, "adopted": adopted,
+                               "level": level_}
     if opinion is not None:
-        stance = opinion.stance(agree["module"])
-        result["second_opinion"] = {**opinion.to_dict(), "stance": stance}
-    result["level"] = level(agree, stance, fallback=bool(answers[adopted].get("fallback")))
-    result["note"] = note(result)
-    run.finish("confidence", result, time.perf_counter() - t0, simulations)
+        summary["second_opinion"] = {**opinion.to_dict(), "stance": stance}
+    result = ConfidenceResult(
+        answers=tuple(ReferenceAnswer.from_json(_plain(a)) for a in answers),
+        triggering_entity=triggering_entity(scn, Mutation(dict(answers[adopted]["mutation"])))
+        if adopted else None,
+        agreement=Agreement.from_json(agree),
+        adopted=adopted,
+        second_opinion=SecondOpinionRecord.from_json(summary["second_opinion"])
+        if opinion is not None else None,
+        level=level_, note=note(summary), revisions=tuple(revisions))
+    simulations = len(alternates) + (len(opinion.runs) + 1 if opinion is not None else 0)
+    run.finish(result, time.perf_counter() - t0, simulations)
     return result
+
+
+def _plain(answer: dict[str, Any]) -> dict[str, Any]:
+    """An answer's JSON with its mutation's values as they are (not copied through JSON)."""
+    return {**answer, "path": list(answer["path"])}
+
+
+def _record_alternates_and_ask(run: Run, scn: Scenario, alternates: list[dict[str, Any]]) -> Any:
+    """Record the alternate references (reference_1.mcap, ...) and return module
+    substitution's opinion (None when it is not asked).
+
+    Module substitution needs only the accident: it was started on a worker before phase II
+    (start_second_opinion); the alternate references are recorded here, all in one batch
+    (each file is the one its run alone records, at one rollout's fixed cost per tick instead
+    of one each)."""
+    from rocas.pipeline.substitution import second_opinion
+
+    started = run.ahead.pop("second_opinion", None)
+    record([(VariantTask(s, (), s.seed), run.out / f"reference_{i}.mcap")
+            for i, s in enumerate((apply_physical(scn, Mutation(dict(cand["mutation"])))
+                                   for cand in alternates), start=1)])
+    if not wants_second_opinion(run):
+        return None
+    return started.result() if started is not None else second_opinion(scn)
+
+
+def _revisions(run: Run, chosen_diff: DiffPhaseResult, answers: list[dict[str, Any]], adopted: int,
+               data: dict[str, Any] | None) -> list[ModuleRevision]:
+    """The phase's revisions of the diff's answer: the chosen reference's walk taken on past
+    departures (walk_passed), then another reference's answer adopted (adopted_reference, whose
+    recording and diff ``data`` become the run's reference.mcap and diff.json)."""
+    out = []
+    first = answers[0]
+    if any(first.get(k) for k in _PASSED):
+        out.append(ModuleRevision(by="confidence", reason="walk_passed",
+                                  before=chosen_diff.deviating_module, after=first["module"],
+                                  path=tuple(first["path"]), fallback=first["fallback"],
+                                  **_passed(first)))
+    if adopted:
+        assert data is not None
+        answer = answers[adopted]
+        _adopt(run, answer, data)
+        out.append(ModuleRevision(by="confidence", reason="adopted_reference",
+                                  before=first["module"], after=answer["module"],
+                                  path=tuple(answer["path"]), fallback=answer["fallback"],
+                                  reference=answer["reference"],
+                                  control_channel=data["control_channel"], entries=data["entries"],
+                                  warnings=tuple(data["warnings"]), **_passed(answer)))
+    return out
+
+
+def _passed(answer: dict[str, Any]) -> dict[str, Any]:
+    """What an answer's walk passed over, as a revision's fields."""
+    return {"entries_passed": answer.get("entries_passed") or None,
+            "cleared_passed": tuple(answer["cleared_passed"]) if answer.get("cleared_passed") else None,
+            "window_passed": answer.get("window_passed") or None}
 
 
 #: how far before a module's departure, in Algorithm 1 windows, an input's departure may lie
@@ -329,30 +389,25 @@ def record_reference(scenario: Scenario, reference: Path) -> None:
     simulate(scenario, output=reference)
 
 
-def triggering_entity(scn: Any, mutation: Mutation) -> dict[str, Any]:
+def triggering_entity(scn: Any, mutation: Mutation) -> TriggeringEntity:
     """The triggering entity of a reference, as the physical phase words it."""
     from rocas.pipeline.physical import describe, entity_kinds, mutated_entities, physical_space
 
     space = physical_space(scn)
     entity = mutated_entities(space, mutation)
-    return {"entity": entity[0] if entity else None,
-            "kind": entity_kinds(scn).get(entity[0]) if entity else None,
-            "entities": entity, "properties": describe(space, mutation)}
+    return TriggeringEntity(entity=entity[0] if entity else None,
+                            kind=entity_kinds(scn).get(entity[0]) if entity else None,
+                            entities=tuple(entity),
+                            properties=tuple(PropertyChange(**p) for p in describe(space, mutation)))
 
 
 def _adopt(run: Run, answer: dict[str, Any], data: dict[str, Any]) -> None:
     """Make ``answer``'s reference the analysis's reference (the files later phases, the
     report and the Rerun view read): its recording, already written, is copied over
-    reference.mcap."""
+    reference.mcap, and its diff (``data``) over diff.json."""
     with atomic_path(run.out / "reference.mcap") as tmp:
         shutil.copyfile(run.out / answer["reference"], tmp)
     write_text_atomic(run.out / "diff.json", json.dumps(data, indent=1))
-    run.state["done"]["diff"] = {"deviating_module": answer["module"], "path": answer["path"],
-                                 "control_channel": data["control_channel"],
-                                 "fallback": answer["fallback"],
-                                 "entries": data["entries"],
-                                 "adopted_from": answer["reference"]}
-    run.state["done"]["diff"] |= {k: answer[k] for k in _PASSED if answer.get(k)}
 
 
 def note(result: dict[str, Any]) -> str:
@@ -393,3 +448,15 @@ def note(result: dict[str, Any]) -> str:
         text += (". Unstable: neither most references nor module substitution support it; "
                  "do not act on it alone")
     return text + "."
+
+
+def with_suspect(level_: str, note_: str, revision: ModuleRevision) -> tuple[str, str]:
+    """The confidence (level, note) once the cyber phase reported a second suspect's fix
+    (``revision``): the reference's walk did not reach the suspect, so the answer is at most
+    contested, and the note says whose parameters were searched and why."""
+    named, suspect = revision.before, revision.after
+    why = (f"{suspect}, which reads its output (substitution names {named} itself)"
+           if revision.reads_named else f"{suspect}, the module substitution names")
+    return "contested", (note_.rstrip(".") + f"; no configuration of {named} avoids the "
+                         f"accident, so the parameters of {why}, were searched and its fix is "
+                         f"reported (at most contested).")

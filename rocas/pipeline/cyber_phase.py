@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -22,38 +23,47 @@ from rocas.pipeline.evaluate import (
     run_batch,
     violation,
 )
-from rocas.pipeline.rundir import Run, jsonable
+from rocas.pipeline.results import (
+    AlternativeFix,
+    ConfidenceResult,
+    CyberResult,
+    ModuleRevision,
+    OtherFix,
+    ParameterChange,
+    ShrunkFix,
+)
+from rocas.pipeline.rundir import Run
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import submit
 from rocas.search.ga import Candidate, SearchResult, run_search, screening_mutations
 from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
 from rocas.search.objectives import ego_dissimilarity
-from rocas.search.space import Mutation
+from rocas.search.space import Mutation, MutationSpace
 
 
-def phase_cyber(run: Run, module: str | None) -> dict[str, Any]:
+def phase_cyber(run: Run, module: str | None) -> CyberResult:
     """Search ``module``'s parameters (every module's with ``--scope all``) for the smallest
     fix, then, when none fixes the accident, the parameters of the module module substitution
     names (:func:`second_suspect`). Returns the phase's result (``fix`` and
-    ``misconfiguration`` when one was found; ``named_module`` when the fix is the second
-    suspect's, whose module then becomes the analysis's deviating module)."""
-    if run.done("cyber"):
-        return run.state["done"]["cyber"]
+    ``misconfiguration`` when one was found; ``named_module`` and a revision of the deviating
+    module when the fix is the second suspect's)."""
+    done = run.get(CyberResult)
+    if done is not None:
+        return done
     t0 = time.perf_counter()
     result, evaluations = _search_fix(run, module, run.out / "cyber.ckpt")
     suspect = second_suspect(run, module)
-    if "fix" not in result and suspect is not None:
+    if result.fix is None and suspect is not None:
+        assert module is not None
         second, more = _search_fix(run, suspect, run.out / "cyber_suspect.ckpt")
         evaluations += more
-        first = {k: result[k] for k in ("module", "parameters", "evaluations", "feasible")}
-        if "fix" in second:
-            result = {**second, "named_module": module, "named_module_search": first}
-            _report_suspect(run, module, suspect)
+        if second.fix is not None:
+            result = replace(second, named_module=module, named_module_search=result.summary(),
+                             revision=_suspect_revision(run, module, suspect))
         else:
-            result["second_suspect"] = {k: second[k] for k in ("module", "parameters", "evaluations",
-                                                                 "feasible")}
-    write_text_atomic(run.out / "cyber.json", json.dumps(result, indent=1, default=jsonable))
-    run.finish("cyber", result, time.perf_counter() - t0, evaluations)
+            result = replace(result, second_suspect=second.summary())
+    write_text_atomic(run.out / "cyber.json", json.dumps(result.to_json(), indent=1))
+    run.finish(result, time.perf_counter() - t0, evaluations)
     return result
 
 
@@ -108,167 +118,181 @@ def second_suspect(run: Run, module: str | None) -> str | None:
 
     Accidents no configuration can avoid (A7's car from behind, A8's hedge) have no second
     suspect: substitution avoids nothing there."""
-    opinion = ((run.state["done"].get("confidence") or {}).get("second_opinion") or {})
-    suspect = opinion.get("module")
-    if module is None or run.cfg.scope != "module" or not opinion.get("accident") or suspect is None:
+    conf = run.get(ConfidenceResult)
+    opinion = conf.second_opinion if conf is not None else None
+    if module is None or run.cfg.scope != "module" or opinion is None or not opinion.accident:
+        return None
+    suspect = opinion.module
+    if suspect is None:
         return None
     if suspect != module:
         return suspect
-    path = list((run.state["done"].get("diff") or {}).get("path") or [])
+    path = list(run.answer().path)
     i = path.index(module) if module in path else -1
     return path[i - 2] if i >= 2 else None
 
 
-def _report_suspect(run: Run, named: str, suspect: str) -> None:
-    """Make ``suspect`` the analysis's deviating module (the diff phase's summary) and say so in
-    the confidence phase's result: the reference's walk did not reach it, so the answer is
-    at most contested (substitution supports it, the references do not)."""
-    done = run.state["done"]
-    diff = done["diff"]
-    consumer = suspect != ((done.get("confidence") or {}).get("second_opinion") or {}).get("module")
-    done["diff"] = {**diff, "deviating_module": suspect, "path": [], "walk_named": named,
-                    "suspect_reads_named": consumer}
-    conf = done.get("confidence")
-    if conf:
-        conf["level"] = "contested"
-        why = (f"{suspect}, which reads its output (substitution names {named} itself)"
-               if consumer else f"{suspect}, the module substitution names")
-        conf["note"] = (conf["note"].rstrip(".") + f"; no configuration of {named} avoids the "
-                        f"accident, so the parameters of {why}, were searched and its fix is "
-                        f"reported (at most contested).")
+def _suspect_revision(run: Run, named: str, suspect: str) -> ModuleRevision:
+    """The revision that makes ``suspect`` the analysis's deviating module: the reference's
+    walk did not reach it, so the answer is at most contested (substitution supports it, the
+    references do not; :func:`rocas.pipeline.confidence.with_suspect`)."""
+    conf = run.get(ConfidenceResult)
+    opinion = conf.second_opinion if conf is not None else None
+    consumer = suspect != (opinion.module if opinion is not None else None)
+    return ModuleRevision(by="cyber", reason="second_suspect", before=named, after=suspect,
+                          path=(), reads_named=consumer)
 
 
-def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[dict[str, Any], int]:
-    """The cyber search over ``module``'s parameters and the minimisation of its fixes:
-    the result (``fix`` and ``misconfiguration`` when one was found) and the simulations run."""
-    scn, orig = run.scenario, run.original
-    assert scn is not None and orig is not None
-    space = run.cyber_space(module)
-    search = run.cfg.search(2, len(space.variables))
-    screening = screening_simulations(space, search.seed) if search.screen else 0
-    run.progress("cyber", {"planned": planned_simulations(search, screening)})
-    horizon = run.h1_horizon
+class _FixTrials:
+    """Runs the accident with candidate fixes and scores each (objectives h1 [m^2] and h2 [-],
+    the accident's constraint), keeping each simulated fix's smallest gap to anything [m]
+    (``separation``) and path length driven [m] (``driven``), for choosing among shrunk
+    fixes."""
 
-    def run_fixes(ms: list[Mutation]) -> list[VariantResult]:
-        tasks = fix_tasks(scn, ms)
+    def __init__(self, run: Run, space: MutationSpace) -> None:
+        assert run.scenario is not None and run.original is not None
+        self.run, self.space = run, space
+        self.separation: dict[Mutation, float] = {}
+        self.driven: dict[Mutation, float] = {}
+        self.blocked = ended_blocked(run.original, run.scenario.dt_s)
+        self.accident_driven = driven_m(run.original.ego_xy)
+
+    def _simulate(self, ms: list[Mutation]) -> list[VariantResult]:
+        run = self.run
+        assert run.scenario is not None
+        tasks = fix_tasks(run.scenario, ms)
         ahead = run.ahead.pop("cyber_screening", None)
         if ahead is not None and ahead[0] == tasks:  # the screening, started on a worker
             return [r for f in ahead[1] for r in f.result()]
         return evaluate(run.executor, tasks, run.cfg.batch_size)
 
-    # each simulated fix's smallest gap to anything [m] and path length driven [m], for
-    # choosing among shrunk fixes
-    separation: dict[Mutation, float] = {}
-    driven: dict[Mutation, float] = {}
-    blocked = ended_blocked(orig, scn.dt_s)
-    accident_driven = driven_m(orig.ego_xy)
-
-    def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+    def batch(self, ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        orig, horizon = self.run.original, self.run.h1_horizon
+        assert orig is not None
         out = []
-        for m, r in zip(ms, run_fixes(ms), strict=True):
-            separation[m] = r.outcome.min_separation_m
-            driven[m] = driven_m(r.ego_xy)
-            out.append(((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), space.distance(m)),
+        for m, r in zip(ms, self._simulate(ms), strict=True):
+            self.separation[m] = r.outcome.min_separation_m
+            self.driven[m] = driven_m(r.ego_xy)
+            out.append(((ego_dissimilarity(orig.ego_xy, r.ego_xy, horizon), self.space.distance(m)),
                         violation(r.outcome)))
         return out
 
-    originals = {v.name: float(v.original) for v in space.variables}
+    def stalls(self, m: Mutation) -> bool:
+        """Whether fix ``m`` leaves the ego standing where the accident did (a search resumed
+        from its checkpoint has no path lengths for its earlier generations: those count as
+        getting past, as before this rule)."""
+        return self.blocked and m in self.driven and self.driven[m] < self.accident_driven + PROGRESS_MARGIN_M
+
+    def gap(self, m: Mutation) -> float | None:
+        """The fix's smallest gap [m]; None when nothing was ever near (JSON has no infinity)."""
+        return self.separation[m] if np.isfinite(self.separation[m]) else None
+
+
+def _search_fix(run: Run, module: str | None, checkpoint: Path) -> tuple[CyberResult, int]:
+    """The cyber search over ``module``'s parameters and the minimisation of its fixes:
+    the result (``fix`` and ``misconfiguration`` when one was found) and the simulations run.
+
+    A fix among the screened single parameters ends the search there: the fix is then chosen
+    from what every seed screens alike (the genetic search runs only when none is a fix). A
+    screened fix that leaves the ego standing where the accident left it is no repair: when
+    every screened fix stalls, the genetic search runs too."""
+    space = run.cyber_space(module)
+    search = run.cfg.search(2, len(space.variables))
+    screening = screening_simulations(space, search.seed) if search.screen else 0
+    run.progress("cyber", {"planned": planned_simulations(search, screening)})
+    trials = _FixTrials(run, space)
     limit = run.cfg.h1_limit_m2
-
-    def stalls(m: Mutation) -> bool:
-        # (a search resumed from its checkpoint has no path lengths for its earlier
-        # generations: those count as getting past, as before this rule)
-        return blocked and m in driven and driven[m] < accident_driven + PROGRESS_MARGIN_M
-
-    # a fix among the screened single parameters ends the search there: the fix is then chosen
-    # from what every seed screens alike (the genetic search runs only when none is a fix).
-    # A screened fix that leaves the ego standing where the accident left it is no repair:
-    # when every screened fix stalls, the genetic search runs too
-    res = run_search(space, batch, search, 2,
+    res = run_search(space, trials.batch, search, 2,
                      checkpoint=checkpoint,
                      on_generation=lambda s: run.progress("cyber", gen_info(s, "h2")),
                      screening_suffices=lambda cands: any(
-                         c.feasible and c.objectives[0] <= limit and not stalls(c.mutation)
+                         c.feasible and c.objectives[0] <= limit and not trials.stalls(c.mutation)
                          for c in cands))
-    result: dict[str, Any] = {"module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
-                              "generations": [gen_json(g, "h2") for g in res.generations],
-                              "evaluations": res.evaluations, "feasible": len(res.feasible),
-                              "first_fix_evaluation": _first_fix(res, run.cfg.h1_limit_m2),
-                              "first_fix_batch_evaluations": _first_fix_batch(res, run.cfg.h1_limit_m2)}
-    candidates = _fix_candidates(res, run.cfg.h1_limit_m2, run.cfg.shrink_candidates, originals,
-                                 stalled=stalls)
+    fields: dict[str, Any] = {
+        "module": module, "scope": run.cfg.scope, "parameters": len(space.variables),
+        "generations": tuple(gen_json(g, "h2") for g in res.generations),
+        "evaluations": res.evaluations, "feasible": len(res.feasible),
+        "first_fix_evaluation": _first_fix(res, limit),
+        "first_fix_batch_evaluations": _first_fix_batch(res, limit)}
+    originals = {v.name: float(v.original) for v in space.variables}  # type: ignore[arg-type]
+    candidates = _fix_candidates(res, limit, run.cfg.shrink_candidates, originals,
+                                 stalled=trials.stalls)
     if search.screen and all(c.generation == 0 for c in res.candidates):
         # the screening decided: a screened fix sits at an end of its parameter's range or
         # halfway to one, so its size says nothing about which way that parameter gives the
         # smaller fix; the other direction of each candidate's parameter is shrunk too
         # (raising a margin, not only lowering it until the ego races ahead)
-        candidates += _other_directions(res, candidates, run.cfg.h1_limit_m2, originals)
-    nearest = _nearest_fix(res, run.cfg.h1_limit_m2)
+        candidates += _other_directions(res, candidates, limit, originals)
+    nearest = _nearest_fix(res, limit)
     if nearest is not None:
-        result["nearest_fix"] = cand_json(nearest)
+        fields["nearest_fix"] = cand_json(nearest)
     evaluations = res.evaluations
     if candidates:
-        # the search ranks fixes by the size it happened to try; each of the best few is shrunk
-        # (set, then magnitudes) and the smallest shrunk fix wins
-        run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
-        # candidates often shrink through the same mutations, and the search has already
-        # scored many of them; the candidates shrink in lockstep, one batch per round
-        scores = Scores(batch, res.candidates)
-        limits = [max(run.cfg.h1_limit_m2, c.objectives[0]) for c in candidates]
-
-        def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
-            return [cons <= 0.0 and objs[0] <= limits[i]
-                    for (i, _), (objs, cons) in zip(trials, scores.of([m for _, m in trials]),
-                                                    strict=True)]
-
-        smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
-        smalls, _ = shrink_all_magnitudes(smalls, space, holds)
-        evaluations += scores.simulated
-        # every shrunk fix was simulated by the search or as a trial, and counted there; only a
-        # search resumed from its checkpoint lacks the gaps of its earlier generations, and
-        # re-running those is the resume's cost, not the analysis's (the report stays the same)
-        unseen = [m for m in dict.fromkeys(smalls) if m not in separation]
-        if unseen:
-            batch(unseen)
-        # with an accident that left the ego standing, a fix that drives it no farther only
-        # softened the stop (ranked after the fixes that get it past)
-        stalled = [stalls(m) for m in smalls]
-        h2 = [space.distance(m) for m in smalls]
-        best, near = _smallest_fix(h2, smalls, separation=[separation[m] for m in smalls],
-                                   originals=originals, stalled=stalled)
-        small, chosen = smalls[best], candidates[best]
-        result["search_best"] = cand_json(chosen)
-        result["minimise_evaluations"] = scores.simulated
-
-        def gap(m: Mutation) -> float | None:
-            # None when nothing was ever near (no actor or object): JSON has no infinity
-            return separation[m] if np.isfinite(separation[m]) else None
-
-        result["shrunk_candidates"] = [
-            {"search": cand_json(c), "shrunk": {k: float(v) for k, v in m.values.items()},
-             "h2": round(d, 6), "min_separation_m": gap(m), "driven_m": round(driven[m], 3),
-             "stalled": st}
-            for c, m, d, st in zip(candidates, smalls, h2, stalled, strict=True)]
-        result["fix"] = {k: float(v) for k, v in small.values.items()}
-
-        def described(m: Mutation) -> list[dict[str, Any]]:
-            return [{"module": n.split(".", 1)[0], "parameter": n,
-                     "original": space.variable(n).original, "mutated": m.values[n]}
-                    for n in m.names]
-
-        result["misconfiguration"] = described(small)
-        result["alternatives"] = [{"h2": round(h2[i], 6), "misconfiguration": described(smalls[i])}
-                                  for i in near]
-        # the other shrunk fixes, larger than the tolerance: they avoid the accident too, and a
-        # reader weighing the answer should see them (reported, never chosen)
-        result["other_fixes"] = [
-            {"h2": round(h2[i], 6), "misconfiguration": described(smalls[i]),
-             "min_separation_m": gap(smalls[i]), "stalled": stalled[i]}
-            for i in _other_fixes(h2, smalls, [best, *near], originals)]
+        minimised, simulated = _minimise(run, trials, res, candidates, originals)
+        fields |= minimised
+        evaluations += simulated
         # fixed.mcap (the accident with the fix) is recorded by phase V, as an extra row of its
         # first batch (rocas.pipeline.validation.record_fix)
     checkpoint.unlink(missing_ok=True)
-    return result, evaluations
+    return CyberResult(**fields), evaluations
+
+
+def _minimise(run: Run, trials: _FixTrials, res: SearchResult, candidates: list[Candidate],
+              originals: Mapping[str, float]) -> tuple[dict[str, Any], int]:
+    """Shrink each of the search's best fixes (set, then magnitudes) and choose the smallest
+    shrunk fix (:func:`_smallest_fix`): the search ranks fixes by the size it happened to try.
+    Returns the result's fields about the fix and the simulations the shrink ran."""
+    space = trials.space
+    run.progress("minimise", {"parameters": sum(len(c.mutation.values) for c in candidates)})
+    # candidates often shrink through the same mutations, and the search has already
+    # scored many of them; the candidates shrink in lockstep, one batch per round
+    scores = Scores(trials.batch, res.candidates)
+    limits = [max(run.cfg.h1_limit_m2, c.objectives[0]) for c in candidates]
+
+    def holds(trial: list[tuple[int, Mutation]]) -> list[bool]:
+        return [cons <= 0.0 and objs[0] <= limits[i]
+                for (i, _), (objs, cons) in zip(trial, scores.of([m for _, m in trial]),
+                                                strict=True)]
+
+    smalls, _ = shrink_sets([c.mutation for c in candidates], holds)
+    smalls, _ = shrink_all_magnitudes(smalls, space, holds)
+    # every shrunk fix was simulated by the search or as a trial, and counted there; only a
+    # search resumed from its checkpoint lacks the gaps of its earlier generations, and
+    # re-running those is the resume's cost, not the analysis's (the report stays the same)
+    unseen = [m for m in dict.fromkeys(smalls) if m not in trials.separation]
+    if unseen:
+        trials.batch(unseen)
+    # with an accident that left the ego standing, a fix that drives it no farther only
+    # softened the stop (ranked after the fixes that get it past)
+    stalled = [trials.stalls(m) for m in smalls]
+    h2 = [space.distance(m) for m in smalls]
+    best, near = _smallest_fix(h2, smalls, separation=[trials.separation[m] for m in smalls],
+                               originals=originals, stalled=stalled)
+
+    def described(m: Mutation) -> tuple[ParameterChange, ...]:
+        return tuple(ParameterChange(module=n.split(".", 1)[0], parameter=n,
+                                     original=space.variable(n).original,  # type: ignore[arg-type]
+                                     mutated=m.values[n]) for n in m.names)  # type: ignore[arg-type]
+
+    return {
+        "search_best": cand_json(candidates[best]),
+        "minimise_evaluations": scores.simulated,
+        "shrunk_candidates": tuple(
+            ShrunkFix(search=cand_json(c), shrunk={k: float(v) for k, v in m.values.items()},
+                      h2=round(d, 6), min_separation_m=trials.gap(m),
+                      driven_m=round(trials.driven[m], 3), stalled=st)
+            for c, m, d, st in zip(candidates, smalls, h2, stalled, strict=True)),
+        "fix": {k: float(v) for k, v in smalls[best].values.items()},
+        "misconfiguration": described(smalls[best]),
+        "alternatives": tuple(AlternativeFix(h2=round(h2[i], 6), misconfiguration=described(smalls[i]))
+                              for i in near),
+        # the other shrunk fixes, larger than the tolerance: they avoid the accident too, and a
+        # reader weighing the answer should see them (reported, never chosen)
+        "other_fixes": tuple(
+            OtherFix(h2=round(h2[i], 6), misconfiguration=described(smalls[i]),
+                     min_separation_m=trials.gap(smalls[i]), stalled=stalled[i])
+            for i in _other_fixes(h2, smalls, [best, *near], originals)),
+    }, scores.simulated
 
 
 #: h2 within which another shrunk fix is reported as an alternative (0.05: one parameter

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -46,7 +46,8 @@ from rocas.pipeline.physical import (
     physical_space,
     screening_mutants,
 )
-from rocas.pipeline.rundir import Run, jsonable
+from rocas.pipeline.results import PhysicalResult, PropertyChange, ShrinkStep, TriggeringEntity
+from rocas.pipeline.rundir import Run
 from rocas.search.ga import Candidate, GenerationStats, run_search
 from rocas.search.minimize import shrink_magnitudes, shrink_set
 from rocas.search.objectives import scenario_dissimilarity, suspiciousness
@@ -181,26 +182,59 @@ def reference_violation(r: VariantResult, needed_m: float, original: Outcome | N
     return v if travel >= needed_m else 0.5 + 0.5 * (needed_m - travel) / needed_m
 
 
-def phase_physical(run: Run) -> dict[str, Any]:
-    from rocas.rollout import simulate
-
-    if run.done("physical"):
-        return run.state["done"]["physical"]
+def phase_physical(run: Run) -> PhysicalResult:
+    """Phase II: screen single-property mutants of the world, search combinations when none
+    avoids the accident, choose the reference by the rule (:func:`choose_reference`) and
+    shrink it towards the original world; records reference.mcap. Returns the phase's result
+    (without ``chosen`` when no world avoids the accident)."""
+    done = run.get(PhysicalResult)
+    if done is not None:
+        return done
     t0 = time.perf_counter()
-    scn, orig, tick = run.scenario, run.original, run.accident_tick
-    assert scn is not None and orig is not None and run.accident is not None
-    space = physical_space(scn)
-    screening = screening_mutants(space)
-    run.progress("physical", {"planned": len(screening)})
+    assert run.scenario is not None
+    space = physical_space(run.scenario)
+    batch = _batch(run, space, _objectives(run, space))
+    screened, candidates, generations = _explore(run, space, batch)
+    feasible = [c for c in candidates if c.feasible]
+    shares = avoidance_shares(screened)
+    chosen = choose_reference(feasible, space, shares)
+    fields: dict[str, Any] = {
+        "screening": len(screened), "screening_feasible": sum(c.feasible for c in screened),
+        "search": "screening" if len(candidates) == len(screened) else "genetic",
+        "generations": tuple(gen_json(g, "f2") for g in generations),
+        "evaluations": len(candidates), "feasible": len(feasible),
+        "front": tuple(cand_json(c) for c in _ranked(feasible, space, shares)[:20]),
+        "avoidance_shares": {n: round(v, 3) for n, v in shares.items() if v > 0}}
+    evaluations = len(candidates)
+    if chosen is not None:
+        shrunk, more = _shrunk_reference(run, space, batch, candidates, chosen)
+        fields |= shrunk
+        evaluations += more
+    result = PhysicalResult(**fields)
+    write_text_atomic(run.out / "physical.json", json.dumps(result.to_json(), indent=1))
+    run.finish(result, time.perf_counter() - t0, evaluations)
+    (run.out / "physical.ckpt").unlink(missing_ok=True)
+    return result
+
+
+Objectives = Callable[[Mutation, VariantResult], tuple[tuple[float, ...], float]]
+Batch = Callable[[list[Mutation]], list[tuple[tuple[float, ...], float]]]
+
+
+def _objectives(run: Run, space: MutationSpace) -> Objectives:
+    """The objectives (f1-f5) and the constraint of one simulated world, measured against the
+    accident's execution up to the accident (see the module docstring)."""
+    scn, orig, tick, accident = run.scenario, run.original, run.accident_tick, run.accident
+    assert scn is not None and orig is not None and accident is not None
     positions = entity_positions(scn, orig.actors_xy[min(tick, len(orig.actors_xy) - 1)])
     ego_xy = tuple(orig.ego_xy[tick])
     prev = orig.ego_xy[max(tick - 1, 0)]
     heading = float(numerics.arctan2(ego_xy[1] - prev[1], ego_xy[0] - prev[0])) if tick else 0.0
     actor_ids = [a.id for a in scn.actors]
     upto = tick + 1
-    partner = actor_ids.index(run.accident.other) if run.accident.other in actor_ids else None
+    partner = actor_ids.index(accident.other) if accident.other in actor_ids else None
     needed_m = path_length_m(orig.ego_xy[:upto]) - PROGRESS_TOLERANCE_M
-    prior_before_s = run.accident.time_s - run.cfg.delta_s
+    prior_before_s = accident.time_s - run.cfg.delta_s
 
     def objectives(m: Mutation, r: VariantResult) -> tuple[tuple[float, ...], float]:
         ents = mutated_entities(space, m)
@@ -213,21 +247,35 @@ def phase_physical(run: Run) -> dict[str, Any]:
         return (f1, f2, space.distance(m), f4, f5), reference_violation(
             r, needed_m, orig.outcome, prior_before_s, scn.dt_s)
 
+    return objectives
+
+
+def _batch(run: Run, space: MutationSpace, objectives: Objectives) -> Batch:
+    """Simulate mutated worlds in batches and score each."""
+    scn = run.scenario
+    assert scn is not None
+
     def batch(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
         tasks = [VariantTask(apply_physical(scn, m), (), scn.seed) for m in ms]
         return [objectives(m, r) for m, r in zip(ms, evaluate(run.executor, tasks, run.cfg.batch_size),
                                                  strict=True)]
 
-    # the screening (generation 0): every single-property mutant, simulated once
+    return batch
+
+
+def _explore(run: Run, space: MutationSpace, batch: Batch
+             ) -> tuple[list[Candidate], list[Candidate], list[GenerationStats]]:
+    """The screening (generation 0: every single-property mutant, simulated once) and, when no
+    single property avoids the accident, the genetic search for combinations. Returns the
+    screened candidates, every candidate, and the generations."""
+    screening = screening_mutants(space)
+    run.progress("physical", {"planned": len(screening)})
     screened = [Candidate(m, tuple(o), float(c), 0) for m, (o, c) in zip(screening, batch(screening),
                                                                         strict=True)]
     stats = _stats(0, screened)
     run.progress("physical", gen_info(stats, "f2"))
     candidates, generations = list(screened), [stats]
-    result: dict[str, Any] = {"screening": len(screened),
-                              "screening_feasible": sum(c.feasible for c in screened)}
     if not any(c.feasible for c in screened):
-        # no single property avoids the accident: the genetic search looks for combinations
         search = run.cfg.search(1)
         run.progress("physical", {"planned": len(screened) + planned_simulations(search)})
 
@@ -238,78 +286,73 @@ def phase_physical(run: Run) -> dict[str, Any]:
                          on_generation=on_generation)
         candidates += res.candidates
         generations += res.generations
-    result["search"] = "screening" if len(candidates) == len(screened) else "genetic"
-    feasible = [c for c in candidates if c.feasible]
-    shares = avoidance_shares(screened)
-    chosen = choose_reference(feasible, space, shares)
-    result |= {"generations": [gen_json(g, "f2") for g in generations],
-               "evaluations": len(candidates), "feasible": len(feasible),
-               "front": [cand_json(c) for c in _ranked(feasible, space, shares)[:20]],
-               "avoidance_shares": {n: round(v, 3) for n, v in shares.items() if v > 0}}
-    evaluations = len(candidates)
-    if chosen is not None:
-        # shrink the reference towards the original: drop properties the avoidance does not
-        # need, then move each real change back while it still avoids the accident and ranks
-        # in the same class of the rule (never a weather change, more entities, an encounter
-        # taken away or an early one), along the interval on which it does: a value past one
-        # that fails is an accident-free pocket between accidents (A6: the truck 0.375 m aside
-        # avoids it, 0.5-0.66 m brake hard, 0.69-1 m avoid it), whose reference differs from
-        # the accident only by a race won, and whose diff ends on a perception change 3.0 s
-        # before planning's, at the edge of Algorithm 1's window
-        scores = Scores(batch, candidates)
-        want = _klass(chosen, space)
+    return screened, candidates, generations
 
-        def holds(ms: list[Mutation]) -> list[bool]:
-            return [cons <= 0.0 and _klass(Candidate(m, objs, cons, 0), space) <= want
-                    for m, (objs, cons) in zip(ms, scores.of(ms), strict=True)]
 
-        small, _ = shrink_set(chosen.mutation, holds)
-        trail = [chosen.mutation, small]
-        small, _ = shrink_magnitudes(small, space, holds, contiguous=True, on_round=trail.append)
-        evaluations += scores.simulated
-        result["shrink_evaluations"] = scores.simulated
-        result["search_chosen"] = cand_json(chosen)
-        # the shrink must not change how the reference avoids the accident: shrunk to the
-        # edge of avoiding it, it can avoid it another way (A1: the creeping car lifted just
-        # below prediction's still-obstacle speed is forecast as static again, prediction no
-        # longer departs, and the ego waits for the car as for a parked one); the most shrunk
-        # step in whose diff the same modules depart as in the unshrunk one's is kept
-        small, checked, recorded = _settle(run, list(dict.fromkeys(trail)))
-        evaluations += len(checked)
-        result["shrink_checked"] = checked
-        if small != chosen.mutation:  # a trial that held: its objectives are already known
-            objs, cons = scores.of([small])[0]
-            chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
-        entity = mutated_entities(space, chosen.mutation)
-        result["chosen"] = cand_json(chosen)
-        result["shared_prefix_s"] = round(-chosen.objectives[3], 3)
-        result["triggering_entity"] = {
-            "entity": entity[0] if entity else None,
-            "kind": entity_kinds(scn).get(entity[0]) if entity else None,
-            "entities": entity,
-            "properties": describe(space, chosen.mutation),
-        }
-        if recorded is not None:
-            recorded.replace(run.out / "reference.mcap")
-        else:
-            simulate(apply_physical(scn, chosen.mutation), output=run.out / "reference.mcap")
-        for stale in run.out.glob("shrink_*.mcap"):
-            stale.unlink()
-    write_text_atomic(run.out / "physical.json", json.dumps(result, indent=1, default=jsonable))
-    run.finish("physical", result, time.perf_counter() - t0, evaluations)
-    (run.out / "physical.ckpt").unlink(missing_ok=True)
-    return result
+def _shrunk_reference(run: Run, space: MutationSpace, batch: Batch, candidates: list[Candidate],
+                      chosen: Candidate) -> tuple[dict[str, Any], int]:
+    """Shrink the chosen reference towards the original and record it (reference.mcap).
+    Returns the result's fields about the reference and the simulations it took.
+
+    The shrink drops properties the avoidance does not need, then moves each real change back
+    while it still avoids the accident and ranks in the same class of the rule (never a
+    weather change, more entities, an encounter taken away or an early one), along the
+    interval on which it does: a value past one that fails is an accident-free pocket between
+    accidents (A6: the truck 0.375 m aside avoids it, 0.5-0.66 m brake hard, 0.69-1 m avoid
+    it), whose reference differs from the accident only by a race won, and whose diff ends on
+    a perception change 3.0 s before planning's, at the edge of Algorithm 1's window.
+
+    The shrink must not change how the reference avoids the accident: shrunk to the edge of
+    avoiding it, it can avoid it another way (A1: the creeping car lifted just below
+    prediction's still-obstacle speed is forecast as static again, prediction no longer
+    departs, and the ego waits for the car as for a parked one); the most shrunk step in whose
+    diff the same modules depart as in the unshrunk one's is kept (:func:`_settle`)."""
+    from rocas.rollout import simulate
+
+    scn = run.scenario
+    assert scn is not None
+    scores = Scores(batch, candidates)
+    want = _klass(chosen, space)
+
+    def holds(ms: list[Mutation]) -> list[bool]:
+        return [cons <= 0.0 and _klass(Candidate(m, objs, cons, 0), space) <= want
+                for m, (objs, cons) in zip(ms, scores.of(ms), strict=True)]
+
+    small, _ = shrink_set(chosen.mutation, holds)
+    trail = [chosen.mutation, small]
+    small, _ = shrink_magnitudes(small, space, holds, contiguous=True, on_round=trail.append)
+    simulated = scores.simulated
+    fields: dict[str, Any] = {"shrink_evaluations": simulated, "search_chosen": cand_json(chosen)}
+    small, checked, recorded = _settle(run, list(dict.fromkeys(trail)))
+    fields["shrink_checked"] = tuple(checked)
+    if small != chosen.mutation:  # a trial that held: its objectives are already known
+        objs, cons = scores.of([small])[0]
+        chosen = replace(chosen, mutation=small, objectives=objs, constraint=cons)
+    entity = mutated_entities(space, chosen.mutation)
+    fields |= {"chosen": cand_json(chosen), "shared_prefix_s": round(-chosen.objectives[3], 3),
+               "triggering_entity": TriggeringEntity(
+                   entity=entity[0] if entity else None,
+                   kind=entity_kinds(scn).get(entity[0]) if entity else None,
+                   entities=tuple(entity),
+                   properties=tuple(PropertyChange(**p) for p in describe(space, chosen.mutation)))}
+    if recorded is not None:
+        recorded.replace(run.out / "reference.mcap")
+    else:
+        simulate(apply_physical(scn, chosen.mutation), output=run.out / "reference.mcap")
+    for stale in run.out.glob("shrink_*.mcap"):
+        stale.unlink()
+    return fields, simulated + len(checked)
 
 
 def _settle(run: Run, trail: list[Mutation]
-            ) -> tuple[Mutation, list[dict[str, Any]], Path | None]:
+            ) -> tuple[Mutation, list[ShrinkStep], Path | None]:
     """The most shrunk reference of ``trail`` (the chosen reference, then each accepted shrink
     step) in whose diff against the accident the same modules depart (have a change point) as
     in the unshrunk reference's: shrinking moves the reference closer to the accident, and may
     move change points, but a step after which a module no longer departs at all (or another
     one starts to, or one that led the commands falls behind them) avoids the accident by
     another mechanism (:func:`same_mechanism`). Returns it, the
-    steps diffed (``{"mutation", "module", "departed"}``, in the order tried) and its recording
+    steps diffed (in the order tried) and its recording
     (None when the trail has one step and nothing was recorded)."""
     from rocas.analysis.diff import diff
     from rocas.pipeline.confidence import record_reference
@@ -320,7 +363,7 @@ def _settle(run: Run, trail: list[Mutation]
     assert scn is not None
     if len(trail) < 2:
         return trail[0], [], None
-    checked: list[dict[str, Any]] = []
+    checked: list[ShrinkStep] = []
 
     def departed(k: int) -> tuple[dict[str, float], float | None, float]:
         """Each departing module's change point [s], the control channel's (or None), and the
@@ -333,8 +376,8 @@ def _settle(run: Run, trail: list[Mutation]
         found = diff(run.out / "accident.mcap", path, delta_s=run.cfg.delta_s).to_json()
         modules = {m["name"]: m["change_point_s"] for m in found["modules"]
                    if m["change_point_s"] is not None}
-        checked.append({"mutation": dict(trail[k].values), "module": found["deviating_module"],
-                        "departed": sorted(modules)})
+        checked.append(ShrinkStep(mutation=dict(trail[k].values), module=found["deviating_module"],
+                              departed=tuple(sorted(modules))))
         control = [c["change_point_s"] for c in found["channels"]
                    if c["topic"] == found["control_channel"]]
         return modules, control[0] if control else None, found["bin_s"]

@@ -27,15 +27,22 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import Any, TypeVar
 
 from rocas._fs import check_writable, is_temporary, write_text_atomic
 from rocas.errors import InputError, OutputError, UsageError
+from rocas.pipeline.codec import ShapeError
 from rocas.pipeline.config import PHASES, AnalyzeConfig, config_dict
 from rocas.pipeline.cyber import cyber_space
 from rocas.pipeline.evaluate import Accident, VariantResult
+from rocas.pipeline.results import (
+    RESULT_TYPES,
+    Answer,
+    DiffPhaseResult,
+    PhaseResult,
+    current_answer,
+    revisions_of,
+)
 from rocas.scenarios.model import Scenario
 from rocas.search.executor import Executor
 from rocas.search.space import MutationSpace
@@ -47,6 +54,36 @@ def noop(_: str, __: dict[str, Any]) -> None:
     pass
 
 
+#: the layout of state.json this rocas writes and reads (1: phase results as free-form
+#: objects, before they were typed)
+SCHEMA_VERSION = 2
+
+R = TypeVar("R")
+
+
+@dataclass
+class RunState:
+    """What state.json holds: the input (``source`` label and the ``source_sha256`` of its
+    content), the settings that change the result (``config``), each finished phase's result
+    (phase -> a result of :mod:`rocas.pipeline.results`, in the order they finished), and per
+    phase its time [s] and simulations."""
+
+    source: str
+    config: dict[str, Any]
+    source_sha256: str | None = None
+    results: dict[str, PhaseResult] = field(default_factory=dict)
+    timings_s: dict[str, float] = field(default_factory=dict)
+    evaluations: dict[str, int] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"version": SCHEMA_VERSION, "source": self.source, "config": self.config,
+                               "done": {p: r.to_json() for p, r in self.results.items()},
+                               "timings_s": self.timings_s, "evaluations": self.evaluations}
+        if self.source_sha256 is not None:
+            out["source_sha256"] = self.source_sha256
+        return out
+
+
 @dataclass
 class Run:
     """Everything phases share (rebuilt on resume from the run directory)."""
@@ -55,7 +92,7 @@ class Run:
     cfg: AnalyzeConfig
     executor: Executor
     progress: Progress
-    state: dict[str, Any]
+    state: RunState
     scenario: Scenario | None = None
     original: VariantResult | None = None
     accident: Accident | None = None
@@ -79,25 +116,33 @@ class Run:
                            ego.stack)
 
     def save(self) -> None:
-        write_text_atomic(self.out / "state.json", json.dumps(self.state, indent=2, default=jsonable))
+        write_text_atomic(self.out / "state.json", json.dumps(self.state.to_json(), indent=2))
 
     def done(self, phase: str) -> bool:
-        return phase in self.state["done"]
+        return phase in self.state.results
 
-    def finish(self, phase: str, result: dict[str, Any], seconds: float, evaluations: int = 0) -> None:
-        self.state["done"][phase] = result
-        self.state["timings_s"][phase] = round(seconds, 3)
-        self.state["evaluations"][phase] = evaluations
+    def get(self, kind: type[R]) -> R | None:
+        """The finished result of the phase whose result type is ``kind`` (None: not finished)."""
+        return self.state.results.get(kind.PHASE)  # type: ignore[attr-defined]
+
+    def result(self, kind: type[R]) -> R:
+        """The finished result of the phase whose result type is ``kind``."""
+        found = self.get(kind)
+        if found is None:
+            raise LookupError(f"phase {kind.PHASE} has not finished")  # type: ignore[attr-defined]
+        return found
+
+    def answer(self) -> Answer:
+        """The current answer: the diff phase's with the later phases' revisions applied."""
+        return current_answer(self.result(DiffPhaseResult), revisions_of(self.state.results))
+
+    def finish(self, result: PhaseResult, seconds: float, evaluations: int = 0) -> None:
+        """Record ``result`` as its phase's, with its time [s] and simulations, in state.json."""
+        phase = result.PHASE
+        self.state.results[phase] = result
+        self.state.timings_s[phase] = round(seconds, 3)
+        self.state.evaluations[phase] = evaluations
         self.save()
-
-
-def jsonable(x: Any) -> Any:
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(type(x).__name__)
-
 
 
 def source_identity(source: str | os.PathLike[str] | Scenario) -> tuple[str, str]:
@@ -129,28 +174,20 @@ def damaged(out: Path, name: str, reason: str) -> InputError:
                       f"delete {out} to start again, or choose another --out")
 
 
-#: what the pipeline reads of each finished phase's stored result before anything else: the
-#: key, the types it may have, and whether it must be there (the rest is checked where it is
-#: read, and anything still wrong is damage too: rocas.pipeline.analyze)
-_PHASE_FIELDS: dict[str, tuple[tuple[str, tuple[type, ...], bool], ...]] = {
-    "replay": (("reproduced", (bool,), True), ("accident", (dict, type(None)), False)),
-    "physical": (("chosen", (dict,), False), ("evaluations", (int,), False)),
-    "diff": (("deviating_module", (str, type(None)), True), ("path", (list,), False),
-             ("control_channel", (str, type(None)), False)),
-    "confidence": (("level", (str, type(None)), False),),
-    "cyber": (("fix", (dict,), False), ("module", (str, type(None)), False)),
-    "validation": (),
-}
-
-
 def _state_problem(state: Any) -> str | None:
-    """What is wrong with a decoded state.json (None: nothing rocas relies on)."""
+    """What is wrong with a decoded state.json's frame (None: nothing); the phases' results
+    are checked by :func:`state_from_json`."""
     if not isinstance(state, dict):
         return "is not a rocas run state (not a JSON object)"
+    version = state.get("version")
+    if version != SCHEMA_VERSION:
+        return (f"has layout {version!r} of another rocas version, not layout {SCHEMA_VERSION}"
+                if isinstance(version, int) and not isinstance(version, bool)
+                else "is not a rocas run state (no layout version)")
     for key in ("done", "config", "timings_s", "evaluations"):
         if not isinstance(state.get(key), dict):
             return f"is not a rocas run state ({key!r} is not an object)"
-    if not isinstance(state.get("source", ""), str) or not isinstance(state.get("source_sha256", ""), str):
+    if not isinstance(state.get("source"), str) or not isinstance(state.get("source_sha256", ""), str):
         return "is not a rocas run state ('source' is not text)"
     unknown = sorted(set(state["done"]) - set(PHASES))
     if unknown:
@@ -162,31 +199,35 @@ def _state_problem(state: Any) -> str | None:
         for phase, value in state[table].items():
             if isinstance(value, bool) or not isinstance(value, int | float):
                 return f"has {table}[{phase!r}] that is not a number"
-    for phase, result in state["done"].items():
-        if not isinstance(result, dict):
-            return f"has a result of phase {phase!r} that is not an object"
-        for key, types, required in _PHASE_FIELDS.get(phase, ()):
-            if key not in result:
-                if required:
-                    return f"has a result of phase {phase!r} without {key!r}"
-                continue
-            value = result[key]
-            if not isinstance(value, types) or (bool not in types and isinstance(value, bool)):
-                return f"has a result of phase {phase!r} whose {key!r} has the wrong type"
-    cyber = state["done"].get("cyber", {})
-    fix = cyber.get("fix") if isinstance(cyber, dict) else None
-    if fix is not None and not all(isinstance(k, str) and isinstance(v, int | float)
-                                   and not isinstance(v, bool) for k, v in fix.items()):
-        return "has a fix that is not a mapping of parameter names to numbers"
     return None
 
 
-def read_state(out: Path) -> dict[str, Any]:
-    """``out/state.json``, checked for what rocas relies on (types, known phases).
+def state_from_json(out: Path, state: Any) -> RunState:
+    """A decoded state.json as a :class:`RunState`, each phase's result read as its type.
+
+    Raises:
+        InputError: it is of another layout or has the wrong shape (damaged: exit 3).
+    """
+    problem = _state_problem(state)
+    if problem:
+        raise damaged(out, "state.json", problem)
+    results = {}
+    for phase, data in state["done"].items():
+        try:
+            results[phase] = RESULT_TYPES[phase].from_json(data)
+        except ShapeError as exc:
+            part = f"whose {exc.where}" if exc.where else "that"
+            raise damaged(out, "state.json", f"has a result of phase {phase!r} {part} {exc.why}") from None
+    return RunState(state["source"], state["config"], state.get("source_sha256"), results,
+                    state["timings_s"], state["evaluations"])
+
+
+def read_state(out: Path) -> RunState:
+    """``out/state.json``, read as its types (:func:`state_from_json`).
 
     Raises:
         InputError: it cannot be read, is not JSON, is too large or too deep, or is not a run
-            state (the run directory is damaged: exit 3).
+            state of this layout (the run directory is damaged: exit 3).
     """
     from rocas._limits import loads_json, read_text_limited
 
@@ -199,10 +240,7 @@ def read_state(out: Path) -> dict[str, Any]:
         state = loads_json(text, origin="state.json")
     except InputError as exc:
         raise damaged(out, "state.json", f"is not valid JSON ({exc.message})") from None
-    problem = _state_problem(state)
-    if problem:
-        raise damaged(out, "state.json", problem)
-    return state
+    return state_from_json(out, state)
 
 
 def _remove_debris(out: Path) -> None:
@@ -217,7 +255,7 @@ def _fmt_setting(v: Any) -> str:
 
 
 def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig,
-                    source_sha256: str | None = None) -> dict[str, Any]:
+                    source_sha256: str | None = None) -> RunState:
     """Create or reopen a run directory; returns its state.
 
     A run directory is resumed only with the same settings (those that change the result; not
@@ -239,17 +277,17 @@ def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig,
             raise UsageError(f"run directory {out} already holds an analysis",
                              "continue it with --resume, or choose another --out")
         state = read_state(out)
-        if "source_sha256" in state:
-            same_input = state["source_sha256"] == source_sha256
-        else:  # written before inputs were identified by content: by path, as then
-            same_input = state.get("source") == source
+        if state.source_sha256 is not None:
+            same_input = state.source_sha256 == source_sha256
+        else:  # an input without a digest: by its label
+            same_input = state.source == source
         if not same_input:
             raise UsageError(f"run directory {out} holds the analysis of another input: it was "
-                             f"started on {state.get('source')}, and {source} has other content",
+                             f"started on {state.source}, and {source} has other content",
                              "choose another --out, or resume with the input it was started with")
         # a setting added after the run was started has its default, which is what that run used
         default = config_dict(AnalyzeConfig())
-        stored = {**default, **{k: v for k, v in state["config"].items() if k in default}}
+        stored = {**default, **{k: v for k, v in state.config.items() if k in default}}
         differ = [f"{k} {_fmt_setting(config[k])} vs {_fmt_setting(stored[k])}"
                   for k in config if config[k] != stored[k]]
         if differ:
@@ -271,11 +309,7 @@ def prepare_run_dir(out: Path, resume: bool, source: str, cfg: AnalyzeConfig,
     except OSError as exc:
         raise OutputError(f"cannot make run directory {out}: {exc.strerror or exc}",
                           "choose a writable place for --out") from exc
-    state = {"version": 1, "source": source, "config": config, "done": {}, "timings_s": {},
-             "evaluations": {}}
-    if source_sha256 is not None:
-        state["source_sha256"] = source_sha256
-    return state
+    return RunState(source, config, source_sha256)
 
 
 
@@ -287,3 +321,13 @@ def remove_if_empty(folders: list[Path]) -> None:
         except OSError:
             return
 
+
+
+def finished_phases(out: Path) -> list[str]:
+    """The phases state.json in ``out`` records as finished, read leniently (for a message
+    after an interruption: [] when it cannot be read)."""
+    try:
+        state = json.loads((out / "state.json").read_text(encoding="utf-8"))
+        return [str(p) for p in state["done"]]
+    except (OSError, ValueError, KeyError, TypeError):
+        return []

@@ -12,6 +12,7 @@ import numpy as np
 
 from rocas._fs import write_text_atomic
 from rocas.pipeline.evaluate import VariantTask, evaluate, is_accident, params_tuple, record
+from rocas.pipeline.results import RegressionTest, RobustFix, StrongerValue, ValidationResult
 from rocas.pipeline.rundir import Run
 from rocas.pipeline.sequential import looks, regression_test
 from rocas.scenarios.model import Scenario
@@ -88,7 +89,7 @@ VALIDATION_SLICE_BATCHES = 1
 SWEEP_VALUES_PER_WAVE = 2
 
 
-def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dict[str, Any]:
+def phase_validation(run: Run, fix: Mapping[str, float], module: str | None) -> ValidationResult:
     """The paper's regression test: K perturbed variants with the original configuration and
     with the minimal fix. Then the robust value: the fix moved further the same way
     (STRONGER_FRACTIONS), each stronger value run on the accident (it must still avoid it and
@@ -114,8 +115,9 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     (``simulations``), and what the finished ones found (accident or not, and h1 where the
     sweep needs it) is written to ``validation.ckpt``, so a resumed run goes on after the last
     finished slice. Results do not depend on the slicing."""
-    if run.done("validation"):
-        return run.state["done"]["validation"]
+    done = run.get(ValidationResult)
+    if done is not None:
+        return done
     t0 = time.perf_counter()
     assert run.scenario is not None and run.original is not None
     variants = perturbed_variants(run.scenario, run.cfg.validation_variants, run.cfg.seed)
@@ -124,79 +126,117 @@ def phase_validation(run: Run, fix: dict[str, float], module: str | None) -> dic
     configs = [params_tuple(values) for _, values in stronger]
     planned = validation_simulations(n, len(stronger))
     found = _validation_checkpoint(run.out / "validation.ckpt", fix, n, planned,
-                                   run.state.get("source_sha256"), run.cfg.seed)
+                                   run.state.source_sha256, run.cfg.seed)
     sims = _Simulations(run, found, planned=planned)
-    schedule = looks(n)
-    original = [VariantTask(v, (), v.seed) for v in variants]
-
+    waves = _Waves(variants, configs, looks(n))
     first = sims.run([VariantTask(run.scenario, c, run.scenario.seed) for c in configs]
                      + [VariantTask(v, params_tuple(fix), v.seed) for v in variants]
-                     + original[:schedule[0] if n else 0], h1_of=range(len(configs)),
+                     + waves.original[:waves.schedule[0] if n else 0], h1_of=range(len(configs)),
                      recordings=record_fix(run, fix))
-    on_accident, fixed_acc, orig_acc = (first[:len(configs)], first[len(configs):len(configs) + n],
-                                        first[len(configs) + n:])
+    on_accident = first[:len(configs)]
     h1 = [found["h1_m2"][str(i)] for i in range(len(configs))]
-    valid = [not acc and h <= run.cfg.h1_limit_m2 for acc, h in zip(on_accident, h1, strict=True)]
-    sims.planned -= n * valid.count(False)
-    ok_fixed = _rate(fixed_acc) if n else None
-    fixed_ok = [not a for a in fixed_acc]
-
-    rates: list[float | None] = [None] * len(configs)
-    skipped: list[str | None] = [None if ok else "it does not avoid the accident or it changes "
-                                 "the ego's trajectory before it" for ok in valid]
-    test = regression_test([not a for a in orig_acc], fixed_ok, n) if n else None
-    if test is not None and test["stopped_early"]:
-        sims.planned -= n - len(orig_acc)
-    k = 0
+    waves.start([not acc and h <= run.cfg.h1_limit_m2 for acc, h in zip(on_accident, h1, strict=True)],
+                 first[len(configs):len(configs) + n], first[len(configs) + n:], sims)
     while True:
-        more = []
-        if test is not None and test["decision"] is None and len(orig_acc) < n:
-            more = original[len(orig_acc):schedule[schedule.index(len(orig_acc)) + 1]]
-        arms: list[int] = []
-        while k < len(configs) and len(arms) < SWEEP_VALUES_PER_WAVE:
-            if valid[k] and not arms and sweep_settled(ok_fixed, [r for r in rates if r is not None]):
-                for j in range(k, len(configs)):
-                    if valid[j]:
-                        skipped[j] = "the robust value was settled by the closer values"
-                        sims.planned -= n
-                k = len(configs)
-                break
-            if valid[k]:
-                arms.append(k)
-            k += 1
+        more, arms = waves.next_original(), waves.next_arms(sims)
         if not more and not arms:
             break
-        wave = sims.run(more + [VariantTask(v, configs[j], v.seed) for j in arms for v in variants])
-        orig_acc = orig_acc + wave[:len(more)]
-        for i, j in enumerate(arms):
-            rates[j] = _rate(wave[len(more) + i * n:len(more) + (i + 1) * n])
-        if more:
-            test = regression_test([not a for a in orig_acc], fixed_ok, n)
-            if test["stopped_early"]:
-                sims.planned -= n - len(orig_acc)
+        waves.take(sims.run(more + [VariantTask(v, configs[j], v.seed) for j in arms
+                                    for v in variants]), len(more), arms, sims)
     sims.report()
-    sweep = []
-    for k, (f, values) in enumerate(stronger):
-        entry: dict[str, Any] = {"fraction": f, "fix": values, "avoids_accident": not on_accident[k],
-                                 "h1_m2": round(h1[k], 6), "success_rate": rates[k]}
-        if skipped[k]:
-            entry["skipped"] = skipped[k]
-        sweep.append(entry)
-    ok_orig = _rate(orig_acc) if n else None
+    sweep = tuple(StrongerValue(fraction=f, fix=values, avoids_accident=not on_accident[k],
+                                h1_m2=round(h1[k], 6), success_rate=waves.rates[k],
+                                skipped=waves.skipped[k] or None)
+                  for k, (f, values) in enumerate(stronger))
+    test = waves.test
+    ok_orig = _rate(waves.orig_acc) if n else None
     if test is not None and test["stopped_early"]:
         worse = test["decision"] == "fix_worse"
     else:
-        worse = bool(n and ok_fixed < ok_orig)  # type: ignore[operator]
-    result = {"variants": n, "success_rate_original": ok_orig, "original_variants": len(orig_acc),
-              "success_rate_fixed": ok_fixed, "fix_makes_it_worse": worse,
-              "regression_test": test,
-              "stronger": sweep, "robust_fix": _robust(ok_fixed, sweep, run.cfg.h1_limit_m2),
-              "simulations": sims.done, "simulations_without_stopping": validation_simulations(
-                  n, len(stronger))}
-    write_text_atomic(run.out / "validation.json", json.dumps(result, indent=1))
-    run.finish("validation", result, time.perf_counter() - t0, sims.done)
+        worse = bool(n and waves.ok_fixed < ok_orig)  # type: ignore[operator]
+    result = ValidationResult(
+        variants=n, success_rate_original=ok_orig, original_variants=len(waves.orig_acc),
+        success_rate_fixed=waves.ok_fixed, fix_makes_it_worse=worse,
+        regression_test=None if test is None else RegressionTest(**test), stronger=sweep,
+        robust_fix=_robust(waves.ok_fixed, sweep, run.cfg.h1_limit_m2),
+        simulations=sims.done, simulations_without_stopping=validation_simulations(n, len(stronger)))
+    write_text_atomic(run.out / "validation.json", json.dumps(result.to_json(), indent=1))
+    run.finish(result, time.perf_counter() - t0, sims.done)
     (run.out / "validation.ckpt").unlink(missing_ok=True)
     return result
+
+
+class _Waves:
+    """What phase V knows between its waves of simulations: the original's runs on the
+    variants so far (``orig_acc``: accident flags) and the regression test over them
+    (``test``), the minimal fix's success rate (``ok_fixed``), and per stronger value whether
+    it is a candidate (``valid``), its success rate over the variants (``rates``, None: not
+    run) and why it was left out (``skipped``); ``k``: the next stronger value to consider."""
+
+    def __init__(self, variants: list[Scenario], configs: list[Any], schedule: list[int]) -> None:
+        self.n, self.configs, self.schedule = len(variants), configs, schedule
+        self.original = [VariantTask(v, (), v.seed) for v in variants]
+        self.rates: list[float | None] = [None] * len(configs)
+        self.skipped: list[str | None] = [None] * len(configs)
+        self.valid: list[bool] = []
+        self.fixed_ok: list[bool] = []
+        self.orig_acc: list[bool] = []
+        self.ok_fixed: float | None = None
+        self.test: dict[str, Any] | None = None
+        self.k = 0
+
+    def start(self, valid: list[bool], fixed_acc: list[bool], orig_acc: list[bool],
+              sims: _Simulations) -> None:
+        """The first wave's findings: which stronger values avoid the accident and keep the
+        ego's earlier trajectory (``valid``), the minimal fix's and the original's first
+        look's accident flags on the variants."""
+        n = self.n
+        self.valid, self.orig_acc = valid, orig_acc
+        sims.planned -= n * valid.count(False)
+        self.ok_fixed = _rate(fixed_acc) if n else None
+        self.fixed_ok = [not a for a in fixed_acc]
+        self.skipped = [None if ok else "it does not avoid the accident or it changes the ego's "
+                        "trajectory before it" for ok in valid]
+        self.test = regression_test([not a for a in orig_acc], self.fixed_ok, n) if n else None
+        if self.test is not None and self.test["stopped_early"]:
+            sims.planned -= n - len(orig_acc)
+
+    def next_original(self) -> list[VariantTask]:
+        """The original's next look on the variants (none once the test has decided)."""
+        done = len(self.orig_acc)
+        if self.test is None or self.test["decision"] is not None or done >= self.n:
+            return []
+        return self.original[done:self.schedule[self.schedule.index(done) + 1]]
+
+    def next_arms(self, sims: _Simulations) -> list[int]:
+        """The next SWEEP_VALUES_PER_WAVE candidate stronger values to run on the variants;
+        none (and the rest marked skipped) once the robust value is settled."""
+        arms: list[int] = []
+        while self.k < len(self.configs) and len(arms) < SWEEP_VALUES_PER_WAVE:
+            k = self.k
+            if self.valid[k] and not arms and sweep_settled(
+                    self.ok_fixed, [r for r in self.rates if r is not None]):
+                for j in range(k, len(self.configs)):
+                    if self.valid[j]:
+                        self.skipped[j] = "the robust value was settled by the closer values"
+                        sims.planned -= self.n
+                self.k = len(self.configs)
+                break
+            if self.valid[k]:
+                arms.append(k)
+            self.k += 1
+        return arms
+
+    def take(self, wave: list[bool], looked: int, arms: list[int], sims: _Simulations) -> None:
+        """A wave's accident flags: ``looked`` runs of the original, then each arm's variants."""
+        n = self.n
+        self.orig_acc = self.orig_acc + wave[:looked]
+        for i, j in enumerate(arms):
+            self.rates[j] = _rate(wave[looked + i * n:looked + (i + 1) * n])
+        if looked:
+            self.test = regression_test([not a for a in self.orig_acc], self.fixed_ok, n)
+            if self.test["stopped_early"]:
+                sims.planned -= n - len(self.orig_acc)
 
 
 def record_fix(run: Run, fix: Mapping[str, float]) -> list[tuple[VariantTask, Path]]:
@@ -358,18 +398,18 @@ def _validation_checkpoint(path: Path, fix: Mapping[str, float], variants: int, 
     return {**fresh, "accident": accident, "h1_m2": h1}
 
 
-def _robust(fixed_rate: float | None, sweep: list[dict[str, Any]], h1_limit: float
-            ) -> dict[str, Any] | None:
+def _robust(fixed_rate: float | None, sweep: tuple[StrongerValue, ...], h1_limit: float
+            ) -> RobustFix | None:
     """The value closest to the minimal fix whose success rate is within ROBUST_TOLERANCE of the
     best rate among it and the stronger values that still avoid the accident and keep the ego's
     earlier trajectory (and were run on the variants); None when that is the minimal fix itself
     (no stronger value avoids clearly more variants)."""
     if fixed_rate is None:
         return None
-    valid = [s for s in sweep if s["avoids_accident"] and s["h1_m2"] <= h1_limit
-             and s["success_rate"] is not None]
-    best = max([fixed_rate] + [s["success_rate"] for s in valid])
+    valid = [s for s in sweep if s.avoids_accident and s.h1_m2 <= h1_limit
+             and s.success_rate is not None]
+    best = max([fixed_rate] + [s.success_rate for s in valid])  # type: ignore[misc]
     if _qualifies(fixed_rate, best, minimal=True):
         return None
-    pick = next(s for s in valid if _qualifies(s["success_rate"], best, minimal=False))
-    return {"fix": pick["fix"], "success_rate": pick["success_rate"], "fraction": pick["fraction"]}
+    pick = next(s for s in valid if _qualifies(s.success_rate, best, minimal=False))  # type: ignore[arg-type]
+    return RobustFix(fix=pick.fix, success_rate=pick.success_rate, fraction=pick.fraction)  # type: ignore[arg-type]

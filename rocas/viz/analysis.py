@@ -34,6 +34,7 @@ from rocas.viz.stream import rrd_recording
 
 if TYPE_CHECKING:
     from rocas.analysis.diff import DiffResult
+    from rocas.pipeline.results import ValidationResult
     from rocas.search.ga import GenerationStats
 
 EXECUTIONS = ("accident", "reference", "fixed")
@@ -48,9 +49,9 @@ def log_verdict(rec: Any, markdown: str, entity: str = VERDICT_ENTITY) -> None:
     rec.log(entity, rr.TextDocument(markdown, media_type="text/markdown"), static=True)
 
 
-def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str = VALIDATION_ENTITY
+def log_validation(rec: Any, validation: ValidationResult | None, entity: str = VALIDATION_ENTITY
                    ) -> None:
-    """Log phase V (the ``validation`` object of report.json) as static bar charts and a table.
+    """Log phase V (the report's ``validation``) as static bar charts and a table.
 
     ``<entity>/original`` is one bar at x = -0.125, ``<entity>/fix`` the minimal fix at x = 0 and
     the stronger values at their fraction of the way to the range's end (x = 0.125 ... 1), all in
@@ -60,35 +61,42 @@ def log_validation(rec: Any, validation: Mapping[str, Any] | None, entity: str =
     import numpy as np
     import rerun as rr
 
-    from rocas.pipeline.report import sweep_text
+    from rocas.pipeline.report import validation_text
 
-    if not validation or not validation.get("variants"):
+    if validation is None or not validation.variants:
         return
-    stronger = list(validation.get("stronger") or [])
+    original, fixed = validation_text(validation)
     rec.log(f"{entity}/original",
-            rr.BarChart([100 * validation["success_rate_original"]], abscissa=[-0.125], widths=[0.1],
-                        color=(220, 50, 47)), static=True)
-    run = [s for s in stronger if s.get("success_rate") is not None]  # the sweep may stop early
-    xs = [0.0] + [float(s["fraction"]) for s in run]
-    ys = [100 * validation["success_rate_fixed"]] + [100 * s["success_rate"] for s in run]
+            rr.BarChart([original], abscissa=[-0.125], widths=[0.1], color=(220, 50, 47)), static=True)
+    run = [s for s in validation.stronger if s.success_rate is not None]  # the sweep may stop early
+    xs = [0.0] + [float(s.fraction) for s in run]
+    ys = [fixed] + [100 * s.success_rate for s in run]  # type: ignore[operator]
     rec.log(f"{entity}/fix", rr.BarChart(np.asarray(ys), abscissa=np.asarray(xs),
                                          widths=[0.1] * len(xs), color=(40, 170, 80)), static=True)
-    robust = (validation.get("robust_fix") or {}).get("fraction")
+    rec.log(f"{entity}/summary", rr.TextDocument(_validation_table(validation), media_type="text/markdown"),
+            static=True)
+
+
+def _validation_table(validation: ValidationResult) -> str:
+    """Phase V as a markdown table: the original, the minimal fix and each stronger value."""
+    from rocas.pipeline.report import sweep_text, validation_text
+
+    original, fixed = validation_text(validation)
+    robust = validation.robust_fix.fraction if validation.robust_fix is not None else None
     rows = ["| configuration | values | accident-free | avoids this accident | h1 [m^2] |",
             "|---|---|---|---|---|",
-            f"| original | | {100 * validation['success_rate_original']:.1f} % | no | |",
-            f"| minimal fix | | {100 * validation['success_rate_fixed']:.1f} % | yes | |"]
-    for st in stronger:
-        values = ", ".join(f"{k} = {v:.4g}" for k, v in st["fix"].items())
-        mark = " **(robust value)**" if st["fraction"] == robust else ""
-        rate = (f"{100 * st['success_rate']:.1f} %" if st.get("success_rate") is not None
-                else f"not run: {st.get('skipped', 'skipped')}")
-        rows.append(f"| {st['fraction']:g} of the way to the range end{mark} | {values} | "
-                    f"{rate} | {'yes' if st['avoids_accident'] else 'no'} | {st['h1_m2']:.3g} |")
-    text = (f"# Validation\n\n{validation['variants']} perturbed variants, each run with every "
+            f"| original | | {original:.1f} % | no | |",
+            f"| minimal fix | | {fixed:.1f} % | yes | |"]
+    for st in validation.stronger:
+        values = ", ".join(f"{k} = {v:.4g}" for k, v in st.fix.items())
+        mark = " **(robust value)**" if st.fraction == robust else ""
+        rate = (f"{100 * st.success_rate:.1f} %" if st.success_rate is not None
+                else f"not run: {st.skipped or 'skipped'}")
+        rows.append(f"| {st.fraction:g} of the way to the range end{mark} | {values} | "
+                    f"{rate} | {'yes' if st.avoids_accident else 'no'} | {st.h1_m2:.3g} |")
+    return (f"# Validation\n\n{validation.variants} perturbed variants, each run with every "
             "configuration below that could still change the robust value.\n\n"
             + "\n".join(rows) + "\n" + (f"\n{sweep_text(validation)}\n" if sweep_text(validation) else ""))
-    rec.log(f"{entity}/summary", rr.TextDocument(text, media_type="text/markdown"), static=True)
 
 
 def log_execution(
@@ -427,7 +435,8 @@ def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
 
     Keys (only for the files that exist): ``accident``, ``reference``, ``fixed`` (paths),
     ``diff`` (the diff JSON), ``searches`` (phase -> generations), ``verdict_md``,
-    ``report`` (report.json), ``validation`` (its phase V object, when variants ran),
+    ``report`` (report.json as a :class:`~rocas.pipeline.report.Report`), ``validation``
+    (its phase V result, when variants ran),
     ``highlight`` (mutated entity ids from physical.json).
     """
     from rocas.viz.search import generations_from_json
@@ -449,12 +458,19 @@ def run_dir_contents(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
             trig = data.get("triggering_entity") or {}
             if phase == "physical" and trig:
                 out["highlight"] = [e for e in (trig.get("entities") or [trig.get("entity")]) if e]
-    if (d / "report.md").is_file():
+    if (d / "report.json").is_file():  # the verdict rendered from the report's view model
+        from rocas.pipeline.codec import ShapeError
+        from rocas.pipeline.report import Report, markdown
+
+        try:
+            report = Report.from_json(_read_json(d / "report.json"))
+        except ShapeError as exc:
+            raise InputError(f"{d / 'report.json'}: not a rocas report ({exc})") from None
+        out["report"], out["verdict_md"] = report, markdown(report)
+        if report.validation is not None and report.validation.variants:
+            out["validation"] = report.validation
+    elif (d / "report.md").is_file():
         out["verdict_md"] = (d / "report.md").read_text()
-    if (d / "report.json").is_file():
-        out["report"] = _read_json(d / "report.json")
-        if (out["report"].get("validation") or {}).get("variants"):
-            out["validation"] = out["report"]["validation"]
     if "accident" not in out:
         raise InputError(f"{d}: no accident.mcap", hint="is this a directory written by rocas analyze?")
     return out

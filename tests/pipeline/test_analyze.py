@@ -3,12 +3,14 @@ accuracy over the catalog is measured by `rocas bench`)."""
 
 import json
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from rocas._json import rounded
 from rocas.errors import OutputError, UsageError
-from rocas.pipeline import VERDICTS, AnalyzeConfig, analyze
+from rocas.pipeline import VERDICTS, AnalyzeConfig
+from rocas.pipeline import analyze as _analyze
 from rocas.pipeline.validation import ROBUST_TOLERANCE, STRONGER_FRACTIONS, validation_simulations
 from rocas.scenarios import load_example
 from rocas.search import LocalExecutor, SerialExecutor
@@ -16,6 +18,11 @@ from rocas.search import LocalExecutor, SerialExecutor
 CFG = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=4)
 REPORT_KEYS = {"verdict", "accident", "triggering_entity", "deviating_module", "misconfiguration",
                "validation", "evaluations", "timings_s"}
+
+
+def analyze(*args, **kwargs):
+    """The analysis's report as its report.json object (the shape these tests read)."""
+    return _analyze(*args, **kwargs).to_json()
 
 
 def _stable(report):
@@ -31,6 +38,25 @@ def red_truck():
 def serial_run(red_truck, tmp_path_factory):
     out = tmp_path_factory.mktemp("serial") / "run"
     return out, analyze(red_truck, out, CFG, executor=SerialExecutor())
+
+
+def test_report_json_is_the_same_bytes_as_before_the_results_were_typed(serial_run):
+    """data/red_truck/report.json was written, with these settings, by rocas before the phase
+    results were typed; only the timings differ from run to run."""
+    out, _ = serial_run
+    stored = (Path(__file__).parent / "data" / "red_truck" / "report.json").read_text()
+    fresh = json.loads((out / "report.json").read_text())
+    fresh["timings_s"] = json.loads(stored)["timings_s"]
+    assert json.dumps(fresh, indent=2) == stored
+
+
+def test_state_json_reads_back_as_the_phases_typed_results(serial_run):
+    from rocas.pipeline.rundir import read_state
+
+    out, _ = serial_run
+    state = read_state(out)
+    assert list(state.results) == ["replay", "physical", "diff", "confidence", "cyber", "validation"]
+    assert state.to_json() == json.loads((out / "state.json").read_text())
 
 
 def test_report_has_the_documented_keys_and_files(serial_run):
@@ -235,7 +261,7 @@ def test_temporaries_a_killed_run_left_are_debris(red_truck, serial_run, tmp_pat
     out.mkdir()
     (out / ".accident.mcap.x1y2z3.part").write_bytes(b"half")
     state = prepare_run_dir(out, False, "label", CFG, "digest")
-    assert state["done"] == {} and list(out.iterdir()) == []
+    assert state.results == {} and list(out.iterdir()) == []
     # ... and resumed later: the temporary goes, the run goes on
     src, serial = serial_run
     shutil.copytree(src, tmp_path / "run")
@@ -344,6 +370,7 @@ def test_the_report_prints_hostile_names_literally(serial_run):
     from rocas._text import printable
     from rocas.cli.analyze import render
     from rocas.cli.console import Env
+    from rocas.pipeline.report import Report
 
     out, report = serial_run
     hostile = json.loads(json.dumps(report))
@@ -352,7 +379,7 @@ def test_the_report_prints_hostile_names_literally(serial_run):
     hostile["explanation"] = f"{hostile['explanation']} {MARKUP} {SPOOF}"
     hostile["warnings"] = [f"channel {TOPIC} [bold]"]
     stdout = io.StringIO()
-    render(hostile, out, Env(stdout=stdout, stderr=io.StringIO()))
+    render(Report.from_json(hostile), out, Env(stdout=stdout, stderr=io.StringIO()))
     text = stdout.getvalue()
     assert "\x1b" not in text and "\r" not in text
     assert f"{printable(SPOOF)}   walk: {printable(TOPIC)} -> {MARKUP}" in text

@@ -275,7 +275,7 @@ def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_sh
     cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=0, batch_size=8)
     out = tmp_path / "run"
     report = analyze(red_truck, out, cfg, executor=SerialExecutor(),
-                     progress=lambda phase, info: events.append(phase))
+                     progress=lambda phase, info: events.append(phase)).to_json()
     assert events.count("substitution") == 1
     assert events.index("substitution") < events.index("physical")
     confidence = json.loads((out / "state.json").read_text())["done"]["confidence"]
@@ -286,3 +286,33 @@ def test_substitution_starts_before_phase_ii_and_runs_once_and_the_alternates_sh
         scn = apply_physical(red_truck, Mutation(dict(answer["mutation"])))
         simulate(scn, output=tmp_path / "alone.mcap")
         assert (out / answer["reference"]).read_bytes() == (tmp_path / "alone.mcap").read_bytes()
+
+
+def test_the_phase_revises_the_diffs_answer_instead_of_rewriting_it(tmp_path):
+    """The chosen reference's walk taken on past a cleared module, then another reference's
+    answer adopted: two revisions, in that order; the adopted reference's recording and diff
+    become reference.mcap and diff.json."""
+    from types import SimpleNamespace
+
+    from rocas.pipeline.confidence import _revisions
+    from rocas.pipeline.results import DiffPhaseResult, current_answer
+
+    diff = DiffPhaseResult(deviating_module="perception", path=("/control", "control", "/p", "perception"),
+                           control_channel="/control", fallback=None, entries=None, warnings=())
+    answers = [{"reference": "reference.mcap", "mutation": {"a": 1.0}, "module": "planning",
+                "path": ["/control", "control"], "fallback": None, "cleared_passed": ["perception"]},
+               {"reference": "reference_1.mcap", "mutation": {"b": 2.0}, "module": "prediction",
+                "path": ["/control", "control", "/pr", "prediction"], "fallback": None}]
+    data = {"control_channel": "/cmd", "entries": None, "warnings": [], "deviating_module": "prediction"}
+    (tmp_path / "reference_1.mcap").write_bytes(b"alternate")
+    (tmp_path / "reference.mcap").write_bytes(b"chosen")
+    revisions = _revisions(SimpleNamespace(out=tmp_path), diff, answers, 1, data)
+    assert [(r.reason, r.before, r.after) for r in revisions] == [
+        ("walk_passed", "perception", "planning"), ("adopted_reference", "planning", "prediction")]
+    answer = current_answer(diff, revisions)
+    assert (answer.deviating_module, answer.control_channel, answer.adopted_from) == (
+        "prediction", "/cmd", "reference_1.mcap")
+    assert answer.cleared_passed is None  # the adopted reference's walk passed nothing
+    assert (tmp_path / "reference.mcap").read_bytes() == b"alternate"
+    assert json.loads((tmp_path / "diff.json").read_text()) == data
+    assert _revisions(SimpleNamespace(out=tmp_path), diff, answers[:1], 0, None)[0].after == "planning"

@@ -3,34 +3,43 @@ accident, the module module substitution names is searched, or, when substitutio
 module itself, the module that reads its output (rocas.pipeline.cyber_phase)."""
 
 import json
+from dataclasses import replace
 from types import SimpleNamespace
 
 import pytest
 
 from rocas.pipeline import cyber_phase
+from rocas.pipeline.results import (
+    Agreement,
+    ConfidenceResult,
+    CyberResult,
+    DiffPhaseResult,
+    ModuleRevision,
+    ParameterChange,
+    SecondOpinionRecord,
+)
+from rocas.pipeline.rundir import Run, RunState, noop
 
 WALK_TO_PLANNING = ("/control", "control", "/planning", "planning")
 WALK_TO_PREDICTION = (*WALK_TO_PLANNING, "/prediction", "prediction")
 
 
-class _Run:
-    """The parts of a run directory phase IV reads and writes."""
+def _opinion(accident, module):
+    return SecondOpinionRecord(module=module, reason="", accident=accident, cleared=(), baseline="",
+                               runs=(), stance="agrees")
 
-    def __init__(self, tmp_path, opinion, scope="module", path=WALK_TO_PLANNING):
-        self.out = tmp_path
-        self.cfg = SimpleNamespace(scope=scope)
-        self.state = {"done": {
-            "diff": {"deviating_module": path[-1] if path else None, "path": list(path)},
-            "confidence": {"level": "contested", "note": "2 of 2 references name planning.",
-                           "second_opinion": opinion}},
-            "timings_s": {}, "evaluations": {}}
 
-    def done(self, phase):
-        return phase in self.state["done"]
-
-    def finish(self, phase, result, seconds, evaluations=0):
-        self.state["done"][phase] = result
-        self.state["evaluations"][phase] = evaluations
+def _Run(tmp_path, opinion, scope="module", path=WALK_TO_PLANNING):
+    """A run whose diff and confidence phases finished (the parts phase IV reads and writes)."""
+    diff = DiffPhaseResult(deviating_module=path[-1] if path else None, path=tuple(path),
+                           control_channel="/control", fallback=None, entries=None, warnings=())
+    conf = ConfidenceResult(answers=(), agreement=Agreement("planning", 2, 2, "planning", None),
+                            adopted=0, second_opinion=_opinion(*opinion), level="contested",
+                            note="2 of 2 references name planning.")
+    state = RunState("x", {}, results={"diff": diff, "confidence": conf})
+    run = Run(tmp_path, SimpleNamespace(scope=scope), None, noop, state)
+    run.save = lambda: None
+    return run
 
 
 def _searches(fixed):
@@ -39,16 +48,24 @@ def _searches(fixed):
 
     def search(run, module, checkpoint):
         calls.append((module, checkpoint.name))
-        out = {"module": module, "parameters": 10, "evaluations": 50, "feasible": 0}
+        out = CyberResult(module=module, scope="module", parameters=10, generations=(),
+                          evaluations=50, feasible=0, first_fix_evaluation=None,
+                          first_fix_batch_evaluations=None)
         if module in fixed:
-            out |= {"feasible": 3, "fix": {f"{module}.x": 1.0},
-                    "misconfiguration": [{"module": module, "parameter": f"{module}.x",
-                                          "original": 0.5, "mutated": 1.0}]}
+            out = replace(out, feasible=3, fix={f"{module}.x": 1.0}, misconfiguration=(
+                ParameterChange(module=module, parameter=f"{module}.x", original=0.5, mutated=1.0),))
         return out, 50
     return search, calls
 
 
-PREDICTION = {"accident": True, "module": "prediction"}
+PREDICTION = (True, "prediction")
+
+
+def _report(run):
+    """The report the run's results give (the current answer and the revised confidence)."""
+    from rocas.pipeline.report import build_report
+
+    return build_report(run.state, None, "misconfiguration")
 
 
 def test_no_fix_in_the_walks_module_sends_the_search_to_substitutions_module(tmp_path, monkeypatch):
@@ -57,20 +74,24 @@ def test_no_fix_in_the_walks_module_sends_the_search_to_substitutions_module(tmp
     run = _Run(tmp_path, PREDICTION)
     result = cyber_phase.phase_cyber(run, "planning")
     assert calls == [("planning", "cyber.ckpt"), ("prediction", "cyber_suspect.ckpt")]
-    assert result["fix"] == {"prediction.x": 1.0} and result["named_module"] == "planning"
-    assert result["named_module_search"]["module"] == "planning"
-    assert run.state["evaluations"]["cyber"] == 100
-    diff = run.state["done"]["diff"]
-    assert diff["deviating_module"] == "prediction" and diff["walk_named"] == "planning"
-    conf = run.state["done"]["confidence"]
-    assert conf["level"] == "contested" and "no configuration of planning" in conf["note"]
+    assert result.fix == {"prediction.x": 1.0} and result.named_module == "planning"
+    assert result.named_module_search.module == "planning"
+    assert run.state.evaluations["cyber"] == 100
+    assert result.revision == ModuleRevision(by="cyber", reason="second_suspect", before="planning",
+                                             after="prediction", path=(), reads_named=False)
+    answer = run.answer()
+    assert answer.deviating_module == "prediction" and answer.walk_named == "planning"
+    assert run.result(DiffPhaseResult).deviating_module == "planning"  # never rewritten
+    conf = _report(run).confidence
+    assert conf.level == "contested" and "no configuration of planning" in conf.note
+    assert run.result(ConfidenceResult).note == "2 of 2 references name planning."
     assert json.loads((tmp_path / "cyber.json").read_text())["named_module"] == "planning"
 
 
 @pytest.mark.parametrize("opinion, scope, fixed", [
     (PREDICTION, "module", {"planning", "prediction"}),  # the walk's module has a fix
-    ({"accident": True, "module": None}, "module", {"prediction"}),  # nothing alone avoids it (A7)
-    ({"accident": False, "module": None}, "module", {"prediction"}),
+    ((True, None), "module", {"prediction"}),  # nothing alone avoids it (A7)
+    ((False, None), "module", {"prediction"}),
     (PREDICTION, "all", {"prediction"}),  # --scope all searched every module already
 ])
 def test_the_walks_module_stands_otherwise(tmp_path, monkeypatch, opinion, scope, fixed):
@@ -79,8 +100,8 @@ def test_the_walks_module_stands_otherwise(tmp_path, monkeypatch, opinion, scope
     run = _Run(tmp_path, opinion, scope)
     result = cyber_phase.phase_cyber(run, "planning")
     assert calls[0] == ("planning", "cyber.ckpt") and len(calls) == 1
-    assert "named_module" not in result
-    assert run.state["done"]["diff"]["deviating_module"] == "planning"
+    assert result.named_module is None and result.revision is None
+    assert run.answer().deviating_module == "planning"
 
 
 def test_a_second_suspect_without_a_fix_leaves_no_fix_and_says_it_was_searched(tmp_path, monkeypatch):
@@ -88,9 +109,9 @@ def test_a_second_suspect_without_a_fix_leaves_no_fix_and_says_it_was_searched(t
     monkeypatch.setattr(cyber_phase, "_search_fix", search)
     run = _Run(tmp_path, PREDICTION)
     result = cyber_phase.phase_cyber(run, "planning")
-    assert "fix" not in result and result["second_suspect"]["module"] == "prediction"
-    assert run.state["done"]["diff"]["deviating_module"] == "planning"
-    assert run.state["evaluations"]["cyber"] == 100
+    assert result.fix is None and result.second_suspect.module == "prediction"
+    assert run.answer().deviating_module == "planning"
+    assert run.state.evaluations["cyber"] == 100
 
 
 def test_substitution_naming_the_walks_module_sends_the_search_to_the_module_reading_it(
@@ -102,12 +123,12 @@ def test_substitution_naming_the_walks_module_sends_the_search_to_the_module_rea
     run = _Run(tmp_path, PREDICTION, path=WALK_TO_PREDICTION)
     result = cyber_phase.phase_cyber(run, "prediction")
     assert calls == [("prediction", "cyber.ckpt"), ("planning", "cyber_suspect.ckpt")]
-    assert result["fix"] == {"planning.x": 1.0} and result["named_module"] == "prediction"
-    diff = run.state["done"]["diff"]
-    assert diff["deviating_module"] == "planning" and diff["walk_named"] == "prediction"
-    assert diff["suspect_reads_named"] is True
-    conf = run.state["done"]["confidence"]
-    assert conf["level"] == "contested" and "planning, which reads its output" in conf["note"]
+    assert result.fix == {"planning.x": 1.0} and result.named_module == "prediction"
+    answer = run.answer()
+    assert answer.deviating_module == "planning" and answer.walk_named == "prediction"
+    assert answer.suspect_reads_named is True and answer.path == ()
+    conf = _report(run).confidence
+    assert conf.level == "contested" and "planning, which reads its output" in conf.note
 
 
 @pytest.mark.parametrize("path", [(), ("/prediction", "prediction")])
@@ -116,7 +137,7 @@ def test_no_module_reads_the_walks_module_on_its_path_no_second_search(tmp_path,
     monkeypatch.setattr(cyber_phase, "_search_fix", search)
     run = _Run(tmp_path, PREDICTION, path=path)
     result = cyber_phase.phase_cyber(run, "prediction")
-    assert calls == [("prediction", "cyber.ckpt")] and "fix" not in result
+    assert calls == [("prediction", "cyber.ckpt")] and result.fix is None
 
 
 class _Pool:
@@ -153,8 +174,7 @@ def _short_run(tmp_path, executor):
     from rocas.pipeline.rundir import Run, noop
 
     scn = dataclasses.replace(next(e for e in entries() if e.id == "A9").scenario, duration_s=3.0)
-    run = Run(tmp_path, AnalyzeConfig(budget=40, population=8), executor, noop,
-              {"done": {}, "timings_s": {}, "evaluations": {}})
+    run = Run(tmp_path, AnalyzeConfig(budget=40, population=8), executor, noop, RunState("x", {}))
     run.scenario = scn
     run.original = run_batch([VariantTask(scn, (), scn.seed)])[0]
     run.accident_tick = 25
@@ -174,7 +194,7 @@ def test_the_screening_started_ahead_is_the_searchs_first_batch(tmp_path):
     plain = _short_run(tmp_path / "p", plain_pool)
     (tmp_path / "p").mkdir()
     want, n_want = cyber_phase._search_fix(plain, "perception", tmp_path / "p" / "cyber.ckpt")
-    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(want, sort_keys=True, default=str)
+    assert got == want
     assert n_got == n_want
     # the plain search simulated the screening itself, as its first batch; the other did not
     assert sum(ahead_pool.submitted) == sum(plain_pool.mapped[0])

@@ -99,7 +99,7 @@ def test_a1_keeps_the_encounter_and_the_shrink_does_not_change_the_diffs_answer(
 
     rec = Path(__file__).resolve().parents[2] / "recordings" / "a01_creeping_car_junction.mcap"
     cfg = AnalyzeConfig(validation_variants=0, alternate_references=0, second_opinion=False)
-    report = analyze(rec, tmp_path / "run", cfg, executor=SerialExecutor())
+    report = analyze(rec, tmp_path / "run", cfg, executor=SerialExecutor()).to_json()
     physical = json.loads((tmp_path / "run" / "physical.json").read_text())
     (name, value), = physical["chosen"]["mutation"].items()
     assert name.endswith(".speed_delta_mps") and value > 0

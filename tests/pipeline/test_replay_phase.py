@@ -9,7 +9,7 @@ import pytest
 from rocas.pipeline.config import AnalyzeConfig
 from rocas.pipeline.evaluate import VariantTask, run_batch
 from rocas.pipeline.replay_phase import phase_replay
-from rocas.pipeline.rundir import Run, noop
+from rocas.pipeline.rundir import Run, RunState, noop
 from rocas.scenarios import load_example
 from rocas.search import SerialExecutor
 
@@ -30,8 +30,7 @@ class _Counting(SerialExecutor):
 
 
 def _run(tmp_path: Path, executor: SerialExecutor) -> Run:
-    return Run(tmp_path, AnalyzeConfig(), executor, noop,
-               {"done": {}, "timings_s": {}, "evaluations": {}})
+    return Run(tmp_path, AnalyzeConfig(), executor, noop, RunState("x", {}))
 
 
 def _same(a, b) -> None:  # noqa: ANN001

@@ -15,12 +15,17 @@ from rocas.errors import InputError, UsageError
 from rocas.pipeline.rundir import read_state
 
 GOOD = {
-    "version": 1, "source": "/r/a.mcap", "source_sha256": "00", "config": {"seed": 0, "scope": "module"},
-    "done": {"replay": {"reproduced": True, "accident": {"kind": "collision"}},
+    "version": 2, "source": "/r/a.mcap", "config": {"seed": 0, "scope": "module"},
+    "done": {"replay": {"source": "scenario", "reproduced": True, "recorded_accident": None,
+                        "accident": {"kind": "collision", "time_s": 4.5, "other": "car_1"},
+                        "ego_rmse_m": 0.0, "stack": "ads"},
              "diff": {"deviating_module": "perception", "path": ["/control", "control"],
-                      "control_channel": "/control"},
-             "cyber": {"module": "perception", "fix": {"perception.x": 1.5}}},
-    "timings_s": {"replay": 1.5}, "evaluations": {"replay": 1},
+                      "control_channel": "/control", "fallback": None, "entries": None,
+                      "warnings": []},
+             "cyber": {"module": "perception", "scope": "module", "parameters": 3, "generations": [],
+                       "evaluations": 24, "feasible": 1, "first_fix_evaluation": 3,
+                       "first_fix_batch_evaluations": 8, "fix": {"perception.x": 1.5}}},
+    "timings_s": {"replay": 1.5}, "evaluations": {"replay": 1}, "source_sha256": "00",
 }
 
 
@@ -45,6 +50,10 @@ def _with(path, value):
     _with(["done", "diff", "deviating_module"], ["planning"]),
     _with(["done", "cyber", "fix"], {"perception.x": "1.5"}),
     _with(["done", "cyber", "fix"], {"perception.x": True}),
+    _with(["done", "diff", "surprise"], 1),
+    _with(["done", "replay", "accident"], {"kind": "collision"}),
+    _with(["version"], 1),  # the layout before phase results were typed
+    {k: v for k, v in GOOD.items() if k != "version"},
     _with(["timings_s", "replay"], "fast"),
     _with(["config", "seed"], {"nested": 1}),
 ])
@@ -57,7 +66,7 @@ def test_wrong_types_in_state_json_are_damage(tmp_path, state):
 
 def test_a_good_state_is_read_and_deep_or_huge_ones_are_damage(tmp_path):
     (tmp_path / "state.json").write_text(json.dumps(GOOD))
-    assert read_state(tmp_path) == GOOD
+    assert read_state(tmp_path).to_json() == GOOD
     (tmp_path / "state.json").write_text("[" * 100000 + "]" * 100000)
     with pytest.raises(InputError, match="damaged: state.json is not valid JSON"):
         read_state(tmp_path)
@@ -86,3 +95,14 @@ def test_a_directory_in_use_is_refused_with_the_holders_pid(tmp_path):
     with locked_directory(tmp_path):  # released when its holder ended
         pass
     assert list(tmp_path.iterdir()) == []  # no lock file left behind
+
+
+def test_a_state_of_the_untyped_layout_is_refused_in_one_line(tmp_path):
+    old = {"version": 1, "source": "/r/a.mcap", "config": {}, "timings_s": {}, "evaluations": {},
+           "done": {"replay": {"reproduced": True}}}
+    (tmp_path / "state.json").write_text(json.dumps(old))
+    with pytest.raises(InputError) as e:
+        read_state(tmp_path)
+    assert e.value.message.splitlines() == [
+        f"run directory {tmp_path} is damaged: state.json has layout 1 of another rocas version, "
+        "not layout 2"]

@@ -1,12 +1,15 @@
 """Phase V beyond the paper's regression test: the fix moved further the same way, and the
 robust value chosen from those stronger values."""
 
+import dataclasses
 import json
 
 import pytest
 
-from rocas.pipeline import AnalyzeConfig, analyze
+from rocas.pipeline import AnalyzeConfig
+from rocas.pipeline import analyze as _analyze
 from rocas.pipeline.cyber import cyber_space
+from rocas.pipeline.results import RobustFix, StrongerValue
 from rocas.pipeline.validation import (
     ROBUST_TOLERANCE,
     STRONGER_FRACTIONS,
@@ -17,6 +20,11 @@ from rocas.pipeline.validation import (
 )
 from rocas.scenarios import load_example
 from rocas.search import SerialExecutor
+
+
+def analyze(*args, **kwargs):
+    """The analysis's report as its report.json object (the shape these tests read)."""
+    return _analyze(*args, **kwargs).to_json()
 
 
 def test_stronger_values_go_on_the_way_the_fix_went_to_the_end_of_the_range():
@@ -64,16 +72,16 @@ def test_phase_v_simulation_count():
 
 
 def _sweep(*rates, avoids=None, h1=None):
-    return [{"fraction": f, "fix": {"p": f}, "success_rate": r,
-             "avoids_accident": True if avoids is None else avoids[k],
-             "h1_m2": 0.0 if h1 is None else h1[k]}
+    return [StrongerValue(fraction=f, fix={"p": f}, success_rate=r,
+                          avoids_accident=True if avoids is None else avoids[k],
+                          h1_m2=0.0 if h1 is None else h1[k])
             for k, (f, r) in enumerate(zip(STRONGER_FRACTIONS, rates, strict=True))]
 
 
 def test_the_robust_value_is_the_closest_within_the_tolerance_of_the_best():
     # best 1.0: the first value at 0.95 or above is the one (fraction 0.25), not the best itself
     rob = _robust(0.60, _sweep(0.835, 0.96, 1.0, 1.0, 1.0), h1_limit=1.0)
-    assert rob == {"fix": {"p": 0.25}, "success_rate": 0.96, "fraction": 0.25}
+    assert rob == RobustFix(fix={"p": 0.25}, success_rate=0.96, fraction=0.25)
 
 
 def test_no_robust_value_when_no_stronger_value_avoids_clearly_more():
@@ -85,7 +93,7 @@ def test_no_robust_value_when_no_stronger_value_avoids_clearly_more():
 def test_values_that_no_longer_avoid_the_accident_or_move_the_ego_earlier_do_not_count():
     rob = _robust(0.5, _sweep(0.9, 0.95, 1.0, 1.0, 1.0, avoids=[False, True, True, True, True],
                               h1=[0.0, 2.0, 0.5, 0.5, 0.5]), h1_limit=1.0)
-    assert rob is not None and rob["fraction"] == 0.5
+    assert rob is not None and rob.fraction == 0.5
 
 
 @pytest.mark.slow  # about 75 s
@@ -190,8 +198,7 @@ def test_the_sweep_stops_only_when_the_rest_cannot_change_the_robust_value():
             run.append(rates[k])
         stopped += len(run) < len(rates)
         sweep = _sweep(*rates)
-        for entry in sweep[len(run):]:
-            entry["success_rate"] = None
+        sweep[len(run):] = [dataclasses.replace(e, success_rate=None) for e in sweep[len(run):]]
         assert _robust(fixed, sweep, h1_limit=1.0) == _full_sweep_pick(fixed, rates), (fixed, rates)
     assert stopped > 300  # the stop is not a dead letter (683 of 3000 here)
 

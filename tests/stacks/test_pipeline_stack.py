@@ -96,7 +96,7 @@ def test_analyze_runs_on_a_lav_recording_with_the_lav_stack(tmp_path):
     simulate(_lav(12.0), output=tmp_path / "acc.mcap")
     rep = analyze(tmp_path / "acc.mcap", tmp_path / "run",
                   AnalyzeConfig(budget=24, population=12, validation_variants=4,
-                                alternate_references=0))
+                                alternate_references=0)).to_json()
     assert rep["stack"] == "lav"
     state = json.loads((tmp_path / "run" / "state.json").read_text())
     assert state["done"]["replay"]["reproduced"] and state["done"]["replay"]["stack"] == "lav"

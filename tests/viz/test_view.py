@@ -4,6 +4,7 @@ import dataclasses
 import json
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from rocas.analysis.diff import diff
 from rocas.rollout import simulate
 from rocas.scenarios.loader import load_example
 from rocas.search.ga import GenerationStats
-from rocas.viz.analysis import log_run_dir, write_analysis_rrd, write_run_dir_rrd
+from rocas.viz.analysis import log_run_dir, run_dir_contents, write_analysis_rrd, write_run_dir_rrd
 from rocas.viz.stream import rrd_recording
 
 
@@ -131,18 +132,22 @@ def test_run_dir_shows_what_exists(pair, tmp_path):
     assert e["/executions/reference/actors/highlight"].rows > 0
 
 
+#: reports rocas analyze wrote (tests/pipeline/data): A6 with the default 200 variants, A7
+#: without a validation (no configuration fix)
+REPORTS = Path(__file__).parents[1] / "pipeline" / "data"
+
+
 def test_run_dir_shows_the_validation_sweep(pair, tmp_path):
+    from rocas.pipeline.report import Report, markdown
+
     run = _run_dir(pair, tmp_path)
-    stronger = [{"fraction": f, "fix": {"perception.brake_threshold": 0.86 + 0.13 * f},
-                 "avoids_accident": True, "h1_m2": 0.0, "success_rate": r}
-                for f, r in ((0.125, 0.835), (0.25, 0.96), (0.5, 1.0), (0.75, 1.0), (1.0, 1.0))]
-    validation = {"variants": 200, "success_rate_original": 0.0, "success_rate_fixed": 0.6,
-                  "fix_makes_it_worse": False, "stronger": stronger,
-                  "robust_fix": {"fix": stronger[1]["fix"], "success_rate": 0.96, "fraction": 0.25}}
-    (run / "report.json").write_text(json.dumps({"validation": validation}))
+    text = (REPORTS / "a06_validated" / "report.json").read_text()
+    (run / "report.json").write_text(text)
     out = tmp_path / "run.rrd"
     contents = write_run_dir_rrd(out, run)
-    assert contents["validation"] == validation
+    report = Report.from_json(json.loads(text))
+    assert contents["validation"] == report.validation and report.validation.variants == 200
+    assert contents["verdict_md"] == markdown(report)
     e, _ = read_rrd(out)
     assert e["/validation/original"].static_rows == 1 and e["/validation/fix"].static_rows == 1
     assert e["/validation/summary"].static_rows == 1
@@ -150,11 +155,20 @@ def test_run_dir_shows_the_validation_sweep(pair, tmp_path):
 
 def test_run_dir_without_a_validation_logs_none(pair, tmp_path):
     run = _run_dir(pair, tmp_path)
-    (run / "report.json").write_text(json.dumps({"validation": {"variants": 0}}))
+    (run / "report.json").write_text((REPORTS / "a07_rear_ended_at_red" / "report.json").read_text())
     out = tmp_path / "run.rrd"
     assert "validation" not in write_run_dir_rrd(out, run)
     e, _ = read_rrd(out)
     assert not any(k.startswith("/validation") for k in e)
+
+
+def test_a_report_json_of_another_shape_is_one_clear_error(pair, tmp_path):
+    from rocas.errors import InputError
+
+    run = _run_dir(pair, tmp_path)
+    (run / "report.json").write_text(json.dumps({"validation": {"variants": 0}}))
+    with pytest.raises(InputError, match="report.json: not a rocas report"):
+        run_dir_contents(run)
 
 
 def test_run_dir_without_reference_logs_the_diff_json(pair, tmp_path):
