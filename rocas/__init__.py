@@ -4,7 +4,7 @@ As a library (docs/api.md)::
 
     import rocas
     result = rocas.diff("accident.mcap", "reference.mcap")   # -> DiffResult
-    report = rocas.analyze("accident.mcap", "runs/a09")        # -> the report
+    report = rocas.analyze("accident.mcap", "runs/a09")        # -> Report
     run = rocas.simulate("roundabout_red_truck")               # -> RunResult
     scenario = rocas.replay("accident.mcap")                   # -> the rebuilt Scenario
 
@@ -31,6 +31,7 @@ if TYPE_CHECKING:
         UsageError,
     )
     from rocas.pipeline.config import AnalyzeConfig
+    from rocas.pipeline.report import Report
     from rocas.scenarios.model import Scenario
     from rocas.sim.engine import BatchResult, RunResult
 
@@ -40,6 +41,7 @@ _LAZY = {
     "simulate": "rocas.api",
     "DiffResult": "rocas.analysis.diff",
     "AnalyzeConfig": "rocas.pipeline.config",
+    "Report": "rocas.pipeline.report",
     "Scenario": "rocas.scenarios.model",
     "RunResult": "rocas.sim.engine",
     "BatchResult": "rocas.sim.engine",
@@ -53,5 +55,5 @@ _LAZY = {
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _LAZY)
 
 __all__ = ["AnalyzeConfig", "BatchResult", "DiffResult", "InputError", "RecordingError",
-           "RocasError", "RunResult", "Scenario", "ScenarioError", "TopologyError",
+           "Report", "RocasError", "RunResult", "Scenario", "ScenarioError", "TopologyError",
            "UsageError", "__version__", "analyze", "diff", "replay", "simulate"]

@@ -5,8 +5,8 @@ same errors (:mod:`rocas.errors`: a :class:`~rocas.errors.RocasError` with ``mes
 ``hint``, the exit code's class). Nothing here prints.
 
 - :func:`diff` (``rocas diff``): two recordings -> :class:`rocas.analysis.diff.DiffResult`;
-- :func:`analyze` (``rocas analyze``): an accident recording or scenario -> the report
-  (:func:`rocas.pipeline.analyze.analyze`), its run directory kept;
+- :func:`analyze` (``rocas analyze``): an accident recording or scenario -> the frozen
+  :class:`rocas.pipeline.report.Report`, its run directory kept;
 - :func:`simulate` (``rocas simulate``): a scenario -> :class:`rocas.sim.engine.RunResult`;
 - ``rocas.replay(recording)``: the scenario a recording is rebuilt into
   (:mod:`rocas.replay`).
@@ -77,7 +77,10 @@ def analyze(source: str | os.PathLike[str] | Scenario, out: str | os.PathLike[st
             ``budget``, ``validation_variants``, ``workers``, ...).
 
     Returns:
-        the report (what ``rocas analyze --json`` prints and ``report.json`` holds).
+        the frozen :class:`rocas.pipeline.report.Report` (``.verdict``,
+        ``.triggering_entity``, ``.deviating_module``, ``.misconfiguration``, ``.confidence``,
+        ...; ``.to_json()`` is what ``report.json`` holds, before its floats are rounded to 12
+        significant digits).
 
     Raises:
         UsageError: an unknown setting or a value out of its range.

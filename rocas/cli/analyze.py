@@ -152,7 +152,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
         with progress:
             report = analyze(source, out, cfg, resume=args.resume, progress=progress,
                              executor=executor)
-            progress.settle(report["evaluations"])
+            progress.settle(report.evaluations)
         if args.rrd:
             _write_rrd(args.rrd, out, report)
     except KeyboardInterrupt as exc:

@@ -21,7 +21,8 @@ from typing import Any
 from rocas._json import rounded
 from rocas._limits import load_json_file
 from rocas.errors import InputError
-from rocas.pipeline.report import accident_text, change, confidence_text, robust_text
+from rocas.pipeline.report import accident_text, change, change_text
+from rocas.pipeline.results import AccidentInfo
 
 #: the fields of the answer, in the report's order; equal answers agree on all of them
 ANSWER_FIELDS = ("verdict", "triggering entity", "deviating module", "misconfiguration")
@@ -173,6 +174,19 @@ def _validation(report: dict[str, Any]) -> tuple[str, Any]:
             f"{100 * rates[1]:.0f} % (fixed)", [v["variants"], *rates])
 
 
+def _robust_words(report: dict[str, Any]) -> str:
+    """The validation's robust value as report.md words it, from report.json's form."""
+    v = report["validation"] or {}
+    rob = v.get("robust_fix")
+    if rob is None:
+        return ("none: no stronger value avoids clearly more variants than the minimal fix"
+                if v.get("stronger") else "not tried")
+    originals = {m["parameter"]: m["original"] for m in report["misconfiguration"]}
+    values = ", ".join(change_text(k, originals.get(k, "?"), x, "->")
+                       for k, x in rob["fix"].items())
+    return f"{values}: accident-free in {100 * rob['success_rate']:.0f} % of the variants"
+
+
 def _answer_fields(report: dict[str, Any]) -> list[tuple[str, str, Any]]:
     """(name, wording, value) of each field of the answer."""
     mis = report["misconfiguration"]
@@ -184,15 +198,19 @@ def _answer_fields(report: dict[str, Any]) -> list[tuple[str, str, Any]]:
     rows: list[tuple[str, str, Any]] = [
         ("verdict", report["verdict"].replace("_", " "), report["verdict"]),
         ("stack", report["stack"] or "", report["stack"]),
-        ("accident", accident_text(report["accident"]) if report["accident"] else "",
+        ("accident", accident_text(AccidentInfo(report["accident"].get("kind", "?"),
+                                                report["accident"].get("time_s"),
+                                                report["accident"].get("other")))
+         if report["accident"] else "",
          report["accident"]),
         ("triggering entity", *_trigger(report)),
         ("deviating module", report["deviating_module"] or "", report["deviating_module"]),
         ("walk", " -> ".join(str(s) for s in report["path"] or []), report["path"]),
-        ("confidence", confidence_text(report) if conf else "", [conf.get("level"), conf.get("note")]),
+        ("confidence", f"{conf.get('level')}: {conf.get('note')}" if conf else "",
+         [conf.get("level"), conf.get("note")]),
         ("misconfiguration", ", ".join(change(m, "->") for m in mis),
          [(m["parameter"], m["original"], m["mutated"]) for m in mis]),
-        ("robust value", robust_text(report, "->") if report["validation"] else "", robust),
+        ("robust value", _robust_words(report) if report["validation"] else "", robust),
         ("validation", *_validation(report)),
         ("search space", searched, [ss.get("parameters_searched"), ss.get("parameters_total")]),
     ]
