@@ -70,7 +70,6 @@ def test_report_has_the_documented_keys_and_files(serial_run):
     for name in ("state.json", "scenario.json", "replay.json", "accident.mcap", "report.json",
                  "report.md"):
         assert (out / name).exists(), name
-    from rocas._json import rounded
 
     assert json.loads((out / "report.json").read_text()) == rounded(report)  # 12 digits
     # every JSON file of the run is standard JSON (no Infinity or NaN), for tools other than ours
