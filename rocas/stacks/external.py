@@ -3,7 +3,7 @@
 A stack file (TOML) declares the command and the parameter space::
 
     name = "lav-process"
-    command = ["python", "-m", "rocas.stacks.lav.run"]
+    command = ["python", "-m", "rocas.rollout.command", "--stack", "lav"]
     parameters = "config.toml"      # or inline [parameters.<module>] tables
 
     # each parameter: name = { default = 0.1, range = [0, 1], unit = "", doc = "..." }

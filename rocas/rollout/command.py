@@ -1,12 +1,13 @@
-"""The LAV-like stack as a separate program, the way an external simulator is driven:
+"""Any registered stack as a separate program, the way an external simulator is driven (the
+command of a stack file, :mod:`rocas.stacks.external`):
 
-    python -m rocas.stacks.lav.run --scenario S.json --config C.json --out run.mcap
+    python -m rocas.rollout.command --stack lav --scenario S.json --config C.json --out run.mcap
 
 ``S.json`` is a scenario in rocas's format (``scenario_to_dict``); ``C.json`` is
 ``{"params": {"brake.brake_threshold": 0.5, ...}, "seed": 0}``. Exit 0 with the recording
 written, 2 with one line on stderr when an input is bad.
 
-    python -m rocas.stacks.lav.run --batch B.json --out rows.npz
+    python -m rocas.rollout.command --stack lav --batch B.json --out rows.npz
 
 is the batch mode an analysis uses (:mod:`rocas.stacks.external`): every run of ``B.json``
 (variants of one scenario structure) in one batch, their trajectories and outcomes in the
@@ -24,7 +25,8 @@ from rocas.errors import RocasError
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="lav-sim", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="rocas-stack-process", description=__doc__.splitlines()[0])
+    ap.add_argument("--stack", required=True, help="the registered stack to run")
     ap.add_argument("--scenario")
     ap.add_argument("--config")
     ap.add_argument("--batch")
@@ -38,22 +40,22 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         if args.batch is not None:
-            return _batch(args.batch, args.out)
+            return _batch(args.stack, args.batch, args.out)
         with open(args.scenario, encoding="utf-8") as f:
             scenario = scenario_from_dict(json.load(f), source=args.scenario,
                                           check_ranges=False)
         with open(args.config, encoding="utf-8") as f:
             config = json.load(f)
-        res = rollout(get_stack("lav"), scenario, config.get("params", {}),
+        res = rollout(get_stack(args.stack), scenario, config.get("params", {}),
                       config.get("seed"), output=args.out)
     except (OSError, ValueError, KeyError, RocasError) as exc:
-        print(f"lav-sim: error: {exc}", file=sys.stderr)
+        print(f"rocas-stack-process: error: {exc}", file=sys.stderr)
         return 2
     print(res.outcome.summary())
     return 0
 
 
-def _batch(batch: str, out: str) -> int:
+def _batch(stack: str, batch: str, out: str) -> int:
     import numpy as np
 
     from rocas.rollout import rollout_batch
@@ -63,7 +65,7 @@ def _batch(batch: str, out: str) -> int:
 
     with open(batch, encoding="utf-8") as f:
         runs = json.load(f)["runs"]
-    res = rollout_batch(get_stack("lav"),
+    res = rollout_batch(get_stack(stack),
                         [scenario_from_dict(r["scenario"], source=batch, check_ranges=False)
                          for r in runs],
                         [r.get("params", {}) for r in runs], [int(r["seed"]) for r in runs])
