@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
             source = rec
         run_dir = out / "runs" / v.key
         t0 = time.perf_counter()
-        report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists())
+        report = analyze(source, run_dir, cfg, resume=(run_dir / "state.json").exists()).to_json()
         wall = time.perf_counter() - t0
         exp, fnd = _expected(v.truth, replayed=not args.from_scenario), _found(report)
         marks = score(exp, fnd)
