@@ -16,6 +16,7 @@ from rocas.stacks.base import Stack
 _BUILTIN = {
     "ads": "rocas.stacks.builtin:ads_stack",
     "lav": "rocas.stacks.lav.stack:lav_stack",
+    "highway": "rocas.stacks.highway.stack:highway_stack",
 }
 _registered: dict[str, Stack] = {}
 DEFAULT_STACK = "ads"
