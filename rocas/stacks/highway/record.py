@@ -34,7 +34,9 @@ TOPIC_COMMAND = "/highway/control/command"
 def channels(period_s: float = 1 / 15) -> tuple[ChannelSpec, ...]:
     """The stack's channels and topology (one message per tick on each)."""
     return (
-        ChannelSpec(TOPIC_TRAFFIC, pb.Traffic, "world", ("perception",), period_s),
+        # ground truth for the view and for replay: the driver reads the road itself, so the
+        # traffic is no input edge of the module graph (the walk ends at perception)
+        ChannelSpec(TOPIC_TRAFFIC, pb.Traffic, "world", (), period_s),
         ChannelSpec(TOPIC_EGO, pb.EgoState, "vehicle", ("perception", "planning", "control"),
                     period_s),
         ChannelSpec(TOPIC_NEIGHBOURS, pb.Neighbours, "perception", ("planning",), period_s),

@@ -1,0 +1,259 @@
+"""Co-mutation in highway-env: physical search, diff, cyber search, validation.
+
+1. **Physical**: a genetic search (:func:`rocas.search.run_search`) over the scene's other
+   vehicles (position on the lane, speed, target speed, class) for a near-identical scene in
+   which the ego, driven by the same parameters, has no accident: the reference.
+2. **Diff**: the accident and the reference are recorded and compared with
+   :func:`rocas.analysis.diff`; the walk from the control channel names the initial deviating
+   module.
+3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
+   accident scene, screened one parameter at a time first, for the smallest change that
+   avoids the accident; the fix is shrunk to the fewest parameters.
+4. **Validation**: the fix on seeded variants of the accident scene that still crash.
+
+Budgets are counted in simulations; simulations run on ``rocas.search.executor`` workers.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from rocas.errors import NotReproducedError
+from rocas.search import Mutation, MutationSpace, SearchConfig, Variable, run_search
+from rocas.search.executor import Executor, SerialExecutor
+from rocas.search.minimize import shrink_set
+from rocas.search.objectives import ego_dissimilarity
+from rocas.stacks.highway.params import parameters
+from rocas.stacks.highway.scene import KINDS, Scene
+from rocas.stacks.highway.world import RunResult, simulate
+
+SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
+
+
+def run_task(task: SimTask) -> RunResult:
+    """One simulation (module level, so worker processes can run it)."""
+    scene, params, seed = task
+    return simulate(scene, dict(params), seed)
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Simulations each phase may spend (a search may stop earlier)."""
+
+    physical_population: int = 12
+    physical_generations: int = 3
+    cyber_population: int = 12
+    cyber_generations: int = 2
+    validation_variants: int = 6
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """What the co-mutation found for one accident.
+
+    Attributes:
+        accident: the accident run; reference: the physical search's reference (None if none).
+        reference_change: what the reference changes in the scene.
+        deviating_module: the diff's initial deviating module (None without a reference).
+        searched_module: whose parameters the cyber search changed.
+        fix: parameter full name -> value (empty when no fix was found).
+        fix_run: the accident scene with the fix (None without a fix).
+        validated: variants the fix avoids, of ``variants`` that crash unfixed.
+        seconds: wall time per phase (physical, diff, cyber, validation).
+        simulations: simulations per phase (physical, cyber, validation).
+    """
+
+    accident: RunResult
+    reference: RunResult | None
+    reference_change: Mapping[str, object]
+    deviating_module: str | None
+    searched_module: str | None
+    fix: Mapping[str, float]
+    fix_run: RunResult | None
+    validated: int
+    variants: int
+    seconds: Mapping[str, float]
+    simulations: Mapping[str, int]
+
+    def summary(self) -> str:
+        s, n = self.seconds, self.simulations
+        fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
+        return (f"{self.accident.scene.name}: module {self.deviating_module} "
+                f"(searched {self.searched_module}); fix {fix}; validated "
+                f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
+                f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
+                f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
+                f"{n['physical']}, cyber {n['cyber']}, validation {n['validation']})")
+
+
+def physical_space(scene: Scene) -> MutationSpace:
+    """Each other vehicle's lane position (+-15 m), speed and target speed (+-4 m/s) and
+    class."""
+    out: list[Variable] = []
+    for i, v in enumerate(scene.others, start=1):
+        target = v.speed_mps if v.target_speed_mps is None else v.target_speed_mps
+        out += [Variable(f"v{i}.s", f"v{i}", "real", v.s_m, v.s_m - 15.0, v.s_m + 15.0, unit="m"),
+                Variable(f"v{i}.speed", f"v{i}", "real", v.speed_mps, max(0.0, v.speed_mps - 4),
+                         v.speed_mps + 4, unit="m/s"),
+                Variable(f"v{i}.target_speed", f"v{i}", "real", target, max(0.0, target - 4),
+                         target + 4, unit="m/s"),
+                Variable(f"v{i}.kind", f"v{i}", "enum", v.kind, choices=KINDS)]
+    return MutationSpace(tuple(out))
+
+
+def apply_physical(scene: Scene, m: Mutation) -> Scene:
+    """The scene with a physical mutation applied."""
+    others = list(scene.others)
+    fields = {"s": "s_m", "speed": "speed_mps", "target_speed": "target_speed_mps",
+              "kind": "kind"}
+    for name, value in m.values.items():
+        who, prop = name.split(".", 1)
+        i = int(who[1:]) - 1
+        others[i] = replace(others[i], **{fields[prop]: value})
+    return replace(scene, others=tuple(others))
+
+
+def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
+    """The module's parameters over their ParamSpec ranges, from their current values."""
+    return MutationSpace(tuple(
+        Variable(p.full_name, p.module, "real", float(current.get(p.full_name, p.default)),
+                 p.low, p.high, unit=p.unit)
+        for p in parameters() if p.module == module))
+
+
+class _Runner:
+    """Counts simulations and maps them over an executor."""
+
+    def __init__(self, executor: Executor) -> None:
+        self.executor = executor
+        self.count = 0
+
+    def runs(self, tasks: Sequence[SimTask]) -> list[RunResult]:
+        self.count += len(tasks)
+        return self.executor.map(run_task, list(tasks))
+
+
+def _until(accident: RunResult) -> int:
+    return max(1, len(accident.times) - 1)
+
+
+def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner: _Runner,
+              budget: Budget, seed: int) -> tuple[RunResult | None, Mutation]:
+    scene = accident.scene
+    space = physical_space(scene)
+    until = _until(accident)
+
+    def evaluate(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        runs = runner.runs([(apply_physical(scene, m), params, accident.seed) for m in ms])
+        return [((space.distance(m), ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)),
+                 r.constraint()) for m, r in zip(ms, runs, strict=True)]
+
+    cfg = SearchConfig(population=budget.physical_population,
+                       generations=budget.physical_generations, seed=seed,
+                       single_property_share=0.5, stop_when_feasible_after=1)
+    result = run_search(space, evaluate, cfg, 2)
+    if not result.feasible:
+        return None, Mutation()
+    best = min(result.feasible, key=lambda c: (c.objectives[0], c.objectives[1]))
+    ref_scene = apply_physical(scene, best.mutation)
+    return run_task((ref_scene, params, accident.seed)), best.mutation
+
+
+def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
+           ) -> dict[str, float]:
+    current = dict(accident.params)
+    space = cyber_space(module, current)
+    if not space.variables:
+        return {}
+    until = _until(accident)
+
+    def tasks(ms: list[Mutation]) -> list[SimTask]:
+        return [(accident.scene, tuple(sorted({**current, **m.values}.items())), accident.seed)
+                for m in ms]
+
+    def evaluate(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        runs = runner.runs(tasks(ms))
+        return [((space.distance(m), ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)),
+                 r.constraint()) for m, r in zip(ms, runs, strict=True)]
+
+    cfg = SearchConfig(population=budget.cyber_population, generations=budget.cyber_generations,
+                       seed=seed, screen=True, stop_when_feasible_after=1)
+    result = run_search(space, evaluate, cfg, 2,
+                        screening_suffices=lambda cs: any(c.feasible for c in cs))
+    if not result.feasible:
+        return {}
+    best = min(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
+                                               c.objectives[1], c.mutation.names))
+    fix, _ = shrink_set(best.mutation, lambda ms: [not r.accident for r in runner.runs(tasks(ms))])
+    return {k: float(v) for k, v in fix.values.items()}
+
+
+def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
+    """Seeded small perturbations of the other vehicles (+-2 m, +-0.5 m/s)."""
+    rng = np.random.default_rng([seed, 3939])
+    out = []
+    for _ in range(count):
+        others = tuple(replace(o, s_m=o.s_m + float(rng.uniform(-2, 2)),
+                               speed_mps=max(0.0, o.speed_mps + float(rng.uniform(-0.5, 0.5))))
+                       for o in scene.others)
+        out.append(replace(scene, others=others))
+    return out
+
+
+def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int = 0, *,
+            executor: Executor | None = None, budget: Budget = Budget()) -> Analysis:
+    """The co-mutation on one accident (``scene`` with the ego parameters ``params``).
+
+    Raises:
+        NotReproducedError: the scene has no accident with these parameters.
+    """
+    from rocas.analysis.diff import diff
+    from rocas.stacks.highway.record import record
+
+    runner = _Runner(executor or SerialExecutor())
+    p = tuple(sorted((params or {}).items()))
+    accident = run_task((scene, p, seed))
+    if not accident.accident:
+        raise NotReproducedError(f"{scene.name}: no accident at seed {seed} with these "
+                                 "parameters", "check the scene and the parameters")
+    secs: dict[str, float] = {}
+    sims: dict[str, int] = {}
+    t0 = time.perf_counter()
+    reference, change = _physical(accident, p, runner, budget, seed)
+    secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
+    module = None
+    t0 = time.perf_counter()
+    if reference is not None:
+        with tempfile.TemporaryDirectory(prefix="rocas-highway-") as tmp:
+            a, b = Path(tmp, "accident.mcap"), Path(tmp, "reference.mcap")
+            record(scene, a, dict(p), seed)
+            record(reference.scene, b, dict(p), seed)
+            module = diff(a, b).deviating_module
+    secs["diff"] = time.perf_counter() - t0
+    searched = module if module in ("planning", "control") else None
+    t0, before = time.perf_counter(), runner.count
+    fix = _cyber(accident, searched, runner, budget, seed) if searched else {}
+    if searched and not fix:  # the named module holds no fix: the other one may
+        other = "control" if searched == "planning" else "planning"
+        fix = _cyber(accident, other, runner, budget, seed)
+        searched = other if fix else searched
+    secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
+    t0, before = time.perf_counter(), runner.count
+    fix_run, validated, variants = None, 0, 0
+    if fix:
+        fixed = tuple(sorted({**dict(p), **fix}.items()))
+        fix_run = run_task((scene, fixed, seed))
+        vs = scene_variants(scene, budget.validation_variants, seed)
+        unfixed = runner.runs([(v, p, seed) for v in vs])
+        crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
+        variants = len(crashing)
+        validated = sum(not r.accident for r in runner.runs([(v, fixed, seed) for v in crashing]))
+    secs["validation"], sims["validation"] = time.perf_counter() - t0, runner.count - before
+    return Analysis(accident, reference, dict(change.values), module, searched, fix, fix_run,
+                    validated, variants, secs, sims)
