@@ -61,7 +61,7 @@ class Analysis:
         accident: the accident run; reference: the physical search's reference (None if none).
         reference_change: what the reference changes in the scene.
         deviating_module: the diff's initial deviating module (None without a reference).
-        searched_module: whose parameters the cyber search changed.
+        searched_module: whose parameters the cyber search changed ("driver": all of them).
         fix: parameter full name -> value (empty when no fix was found).
         fix_run: the accident scene with the fix (None without a fix).
         validated: variants the fix avoids, of ``variants`` that crash unfixed.
@@ -120,11 +120,12 @@ def apply_physical(scene: Scene, m: Mutation) -> Scene:
 
 
 def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
-    """The module's parameters over their ParamSpec ranges, from their current values."""
+    """The module's parameters (every driver parameter for ``"driver"``) over their ParamSpec
+    ranges, from their current values."""
     return MutationSpace(tuple(
         Variable(p.full_name, p.module, "real", float(current.get(p.full_name, p.default)),
                  p.low, p.high, unit=p.unit)
-        for p in parameters() if p.module == module))
+        for p in parameters() if module in (p.module, "driver")))
 
 
 class _Runner:
@@ -236,13 +237,15 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
             record(reference.scene, b, dict(p), seed)
             module = diff(a, b).deviating_module
     secs["diff"] = time.perf_counter() - t0
-    searched = module if module in ("planning", "control") else None
+    # perception, the vehicle and the world have no parameters: a walk that ends there (the
+    # reference changed the traffic, which the driver perceives exactly) leaves the search to
+    # every driver parameter; so does a named module whose own parameters hold no fix
+    searched = module if module in ("planning", "control") else "driver"
     t0, before = time.perf_counter(), runner.count
-    fix = _cyber(accident, searched, runner, budget, seed) if searched else {}
-    if searched and not fix:  # the named module holds no fix: the other one may
-        other = "control" if searched == "planning" else "planning"
-        fix = _cyber(accident, other, runner, budget, seed)
-        searched = other if fix else searched
+    fix = _cyber(accident, searched, runner, budget, seed)
+    if searched != "driver" and not fix:
+        searched = "driver"
+        fix = _cyber(accident, searched, runner, budget, seed)
     secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
     t0, before = time.perf_counter(), runner.count
     fix_run, validated, variants = None, 0, 0

@@ -20,18 +20,20 @@ HARMFUL = {
 
 
 def random_scene(rng: np.random.Generator, name: str) -> Scene:
-    """A three-lane highway: the ego in the middle lane, five to eight others ahead and
-    beside it, some slow."""
+    """A three-lane highway: the ego in the middle lane closing on a slow or stopped vehicle
+    60 to 140 m ahead, with three to six others around it (some beside it, so changing lane
+    is not always possible)."""
     ego = VehicleSpec(("0", "1", 1), 0.0, float(rng.uniform(22, 28)),
                       float(rng.uniform(26, 32)))
-    others = []
-    for _ in range(int(rng.integers(5, 9))):
-        speed = float(rng.uniform(8, 26))
-        others.append(VehicleSpec(("0", "1", int(rng.integers(0, 3))),
-                                  float(rng.uniform(15, 220)), speed,
-                                  speed + float(rng.uniform(-2, 4)),
+    slow_speed = float(rng.uniform(0, 8))
+    others = [VehicleSpec(("0", "1", 1), float(rng.uniform(60, 140)), slow_speed, slow_speed,
+                          kind=str(rng.choice(["still", "idm"])), lane_change=False)]
+    for _ in range(int(rng.integers(3, 7))):
+        speed = float(rng.uniform(15, 28))
+        others.append(VehicleSpec(("0", "1", int(rng.choice([0, 2]))),
+                                  float(rng.uniform(-30, 120)), speed,
+                                  speed + float(rng.uniform(-2, 3)),
                                   kind=str(rng.choice(["idm", "idm", "linear", "defensive"]))))
-    others.sort(key=lambda v: (v.lane[2], v.s_m))
     kept: list[VehicleSpec] = []
     for v in others:  # at least 12 m between vehicles of one lane
         if all(k.lane != v.lane or abs(k.s_m - v.s_m) >= 12 for k in kept):
