@@ -43,9 +43,10 @@ class DecisionFrame:
     """One tick of the driver's decision, seam by seam.
 
     Attributes:
-        lane, target_lane: lane indices before and after MOBIL.
+        lane, target_lane: the current lane and MOBIL's target lane.
         front, rear: neighbours on the current lane (perception).
-        target_front, target_rear: on the target lane (equal to front/rear when keeping lane).
+        left_front, left_rear, right_front, right_rear: on the lanes beside it, the lower and
+            the higher lane id (perception; absent where there is no such lane).
         idm_accel_mps2, idm_accel_target_mps2: IDM on the current and target lanes (planning).
         desired_gap_m: IDM's desired gap to the front vehicle, 0 without one [m].
         target_speed_mps: the driver's target speed [m/s].
@@ -56,8 +57,10 @@ class DecisionFrame:
     target_lane: tuple[str, str, int]
     front: Neighbour
     rear: Neighbour
-    target_front: Neighbour
-    target_rear: Neighbour
+    left_front: Neighbour
+    left_rear: Neighbour
+    right_front: Neighbour
+    right_rear: Neighbour
     idm_accel_mps2: float
     idm_accel_target_mps2: float
     desired_gap_m: float
@@ -73,6 +76,16 @@ def _neighbour(ego: Any, other: Any) -> Neighbour:
                      float(other.speed))
 
 
+def _side(ego: Any, offset: int) -> tuple[Neighbour, Neighbour]:
+    """Neighbours on the lane ``offset`` ids away, when the road has it."""
+    lane = ego.lane_index
+    side = (lane[0], lane[1], lane[2] + offset)
+    if side not in ego.road.network.side_lanes(lane):
+        return NO_NEIGHBOUR, NO_NEIGHBOUR
+    front, rear = ego.road.neighbour_vehicles(ego, side)
+    return _neighbour(ego, front), _neighbour(ego, rear)
+
+
 def read_seams(ego: Any) -> DecisionFrame:
     """What the driver perceived, planned and commanded in the ``act`` that just ran."""
     road = ego.road
@@ -83,12 +96,12 @@ def read_seams(ego: Any) -> DecisionFrame:
         accel_target = float(ego.acceleration(ego_vehicle=ego, front_vehicle=t_front,
                                               rear_vehicle=t_rear))
     else:
-        t_front, t_rear, accel_target = front, rear, accel
+        accel_target = accel
     gap = float(ego.desired_gap(ego, front)) if front is not None else 0.0
     return DecisionFrame(
         tuple(ego.lane_index), tuple(ego.target_lane_index), _neighbour(ego, front),
-        _neighbour(ego, rear), _neighbour(ego, t_front), _neighbour(ego, t_rear), accel,
-        accel_target, gap, float(ego.target_speed), float(ego.action["steering"]),
+        _neighbour(ego, rear), *_side(ego, -1), *_side(ego, +1), accel, accel_target, gap,
+        float(ego.target_speed), float(ego.action["steering"]),
         float(ego.action["acceleration"]))
 
 

@@ -87,9 +87,10 @@ class _Publisher:
         ego.on_road = bool(sim.ego.on_road)
         nb = pb.Neighbours()
         self._stamp(nb, TOPIC_NEIGHBOURS, "perception", t_s)
-        nb.lane, nb.target_lane = lane_text(f.lane), lane_text(f.target_lane)
-        for field, n in (("front", f.front), ("rear", f.rear), ("target_front", f.target_front),
-                         ("target_rear", f.target_rear)):
+        nb.lane = lane_text(f.lane)
+        for field, n in (("front", f.front), ("rear", f.rear), ("left_front", f.left_front),
+                         ("left_rear", f.left_rear), ("right_front", f.right_front),
+                         ("right_rear", f.right_rear)):
             _neighbour(getattr(nb, field), n)
         dec = pb.Decision()
         self._stamp(dec, TOPIC_DECISION, "planning", t_s)

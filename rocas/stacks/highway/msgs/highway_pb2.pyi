@@ -75,22 +75,24 @@ class Neighbour(_message.Message):
     def __init__(self, present: _Optional[bool] = ..., id: _Optional[int] = ..., gap_m: _Optional[float] = ..., speed_mps: _Optional[float] = ...) -> None: ...
 
 class Neighbours(_message.Message):
-    __slots__ = ("stamp", "lane", "target_lane", "front", "rear", "target_front", "target_rear")
+    __slots__ = ("stamp", "lane", "front", "rear", "left_front", "left_rear", "right_front", "right_rear")
     STAMP_FIELD_NUMBER: _ClassVar[int]
     LANE_FIELD_NUMBER: _ClassVar[int]
-    TARGET_LANE_FIELD_NUMBER: _ClassVar[int]
     FRONT_FIELD_NUMBER: _ClassVar[int]
     REAR_FIELD_NUMBER: _ClassVar[int]
-    TARGET_FRONT_FIELD_NUMBER: _ClassVar[int]
-    TARGET_REAR_FIELD_NUMBER: _ClassVar[int]
+    LEFT_FRONT_FIELD_NUMBER: _ClassVar[int]
+    LEFT_REAR_FIELD_NUMBER: _ClassVar[int]
+    RIGHT_FRONT_FIELD_NUMBER: _ClassVar[int]
+    RIGHT_REAR_FIELD_NUMBER: _ClassVar[int]
     stamp: Stamp
     lane: str
-    target_lane: str
     front: Neighbour
     rear: Neighbour
-    target_front: Neighbour
-    target_rear: Neighbour
-    def __init__(self, stamp: _Optional[_Union[Stamp, _Mapping]] = ..., lane: _Optional[str] = ..., target_lane: _Optional[str] = ..., front: _Optional[_Union[Neighbour, _Mapping]] = ..., rear: _Optional[_Union[Neighbour, _Mapping]] = ..., target_front: _Optional[_Union[Neighbour, _Mapping]] = ..., target_rear: _Optional[_Union[Neighbour, _Mapping]] = ...) -> None: ...
+    left_front: Neighbour
+    left_rear: Neighbour
+    right_front: Neighbour
+    right_rear: Neighbour
+    def __init__(self, stamp: _Optional[_Union[Stamp, _Mapping]] = ..., lane: _Optional[str] = ..., front: _Optional[_Union[Neighbour, _Mapping]] = ..., rear: _Optional[_Union[Neighbour, _Mapping]] = ..., left_front: _Optional[_Union[Neighbour, _Mapping]] = ..., left_rear: _Optional[_Union[Neighbour, _Mapping]] = ..., right_front: _Optional[_Union[Neighbour, _Mapping]] = ..., right_rear: _Optional[_Union[Neighbour, _Mapping]] = ...) -> None: ...
 
 class Decision(_message.Message):
     __slots__ = ("stamp", "target_lane", "lane_change", "idm_accel_mps2", "idm_accel_target_mps2", "desired_gap_m", "target_speed_mps")
