@@ -189,8 +189,10 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
                         screening_suffices=lambda cs: any(c.feasible for c in cs))
     if not result.feasible:
         return {}
-    best = min(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
-                                               c.objectives[1], c.mutation.names))
+    # fewest parameters, then the fix that keeps the ego's drive before the accident best
+    # (h1), then the smallest change (h2)
+    best = min(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[1],
+                                               c.objectives[0], c.mutation.names))
     fix, _ = shrink_set(best.mutation, lambda ms: [not r.accident for r in runner.runs(tasks(ms))])
     return {k: float(v) for k, v in fix.values.items()}
 
