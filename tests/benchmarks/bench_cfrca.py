@@ -1,9 +1,9 @@
 """The injected-misconfiguration benchmark of the highway stack, measured as CF-RCA is.
 
 CF-RCA (IEEE RA-L 2026) reports the misconfigured parameter found in 98.3 % of 12,926
-MetaDrive scenarios. Here: draw random highway-env scenes (``rocas.stacks.highway.draw``), set
-one driver parameter of the ego to a harmful value, keep the runs that crash and that
-restoring the parameter repairs, run rocas's co-mutation on each
+MetaDrive scenarios. Here: draw random highway-env scenes from three families
+(``rocas.stacks.highway.draw``), set one driver parameter of the ego to a harmful value, keep
+the runs that crash and that restoring the parameter repairs, run rocas's co-mutation on each
 (``rocas.stacks.highway.comutation.analyze``) and count how often the fix it proposes moves
 the injected parameter back the right way, how often the diff names the injected parameter's
 module, and the time per accident.
@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from rocas.search.executor import make_executor  # noqa: E402
 from rocas.stacks.highway.comutation import analyze  # noqa: E402
-from rocas.stacks.highway.draw import HARMFUL, harmful_value, random_scene  # noqa: E402
+from rocas.stacks.highway.draw import draw  # noqa: E402
 from rocas.stacks.highway.params import parameters  # noqa: E402
 from rocas.stacks.highway.world import simulate  # noqa: E402
 
@@ -35,13 +35,9 @@ CF_RCA = "CF-RCA (IEEE RA-L 2026): 98.3 % of 12,926 MetaDrive scenarios"
 def injected_accidents(seed: int):
     """Yield (scene, parameter, harmful value) for runs that crash and that restoring the
     parameter repairs, forever (scene k is drawn from the generator seeded with (seed, k))."""
-    names = sorted(HARMFUL)
     k = 0
     while True:
-        rng = np.random.default_rng([seed, k])
-        scene = random_scene(rng, f"bench-{seed}-{k}")
-        name = names[k % len(names)]
-        value = harmful_value(rng, name)
+        scene, name, value = draw(np.random.default_rng([seed, k]), f"bench-{seed}-{k}")
         k += 1
         if simulate(scene, {name: value}, 0).accident and not simulate(scene, {}, 0).accident:
             yield scene, name, value
