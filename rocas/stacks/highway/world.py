@@ -138,7 +138,7 @@ def _place(road: Any, cls: type, spec: VehicleSpec, vid: int) -> Any:
                                   else spec.target_speed_mps)
         kwargs["enable_lane_change"] = spec.lane_change
     v = cls(road, lane.position(spec.s_m, 0.0), **kwargs)
-    if spec.destination:
+    if spec.destination and spec.kind != "still":  # a driverless vehicle keeps its lane
         v.plan_route_to(spec.destination)
     v.rocas_id = vid
     return v
