@@ -31,7 +31,8 @@ def _run(args: argparse.Namespace) -> int:
             params[e.parameter] = e.fix  # type: ignore[assignment]
         run = record(e.scene, args.out, params, seed)
         what = "collision" if run.collided else "off road" if run.off_road else "no accident"
-        print(f"wrote {args.out}: {what} at {run.accident_t_s} s")
+        when = "" if run.accident_t_s is None else f" at {run.accident_t_s:.1f} s"
+        print(f"wrote {args.out}: {what}{when}")
         return 0
     from rocas.search.executor import make_executor
     from rocas.stacks.highway.comutation import analyze
