@@ -117,7 +117,8 @@ def _attr(table: Mapping[str, tuple[str, str]], key: str) -> Any:
 
 
 def _env_config(scene: Scene) -> dict[str, Any]:
-    cfg: dict[str, Any] = {"simulation_frequency": scene.frequency_hz, "policy_frequency": 1,
+    hz = int(scene.frequency_hz) if float(scene.frequency_hz).is_integer() else scene.frequency_hz
+    cfg: dict[str, Any] = {"simulation_frequency": hz, "policy_frequency": 1,
                            "duration": scene.duration_s}
     if scene.env_id == "highway-v0":
         cfg.update(vehicles_count=0, lanes_count=4)

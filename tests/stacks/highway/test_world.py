@@ -59,3 +59,18 @@ def test_without_highway_env_the_error_names_the_extra():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert "rocas[highway]" in out.stdout
+
+
+def test_every_environment_builds_and_repeats_bit_for_bit():
+    from rocas.stacks.highway.accidents import entry
+    from rocas.stacks.highway.scene import Scene, VehicleSpec
+
+    crossing = Scene("crossing", "intersection-v0",
+                     VehicleSpec(("o0", "ir0", 0), 60.0, 8.0, destination="o1"),
+                     (VehicleSpec(("o1", "ir1", 0), 60.0, 8.0, destination="o3"),),
+                     duration_s=4.0)
+    scenes = [entry(k).scene for k in ("h01", "h02", "h04")] + [crossing]
+    assert {s.env_id for s in scenes} == {"highway-v0", "merge-v0", "roundabout-v0",
+                                          "intersection-v0"}
+    for scene in scenes:
+        assert simulate(scene, {}, 1).digest() == simulate(scene, {}, 1).digest()
