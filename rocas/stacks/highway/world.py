@@ -205,7 +205,7 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
     return RunResult(scene, int(seed), p, np.array(times),
                      np.array(ego_rows, dtype=np.float64).reshape(-1, 5),
                      np.array(other_rows, dtype=np.float64).reshape(len(times), a, 4),
-                     collided, t_collision, hit, off_road, t_off, min_ttc, min_margin)
+                     collided, t_collision, hit, off_road, t_off, float(min_ttc), float(min_margin))
 
 
 def _ttc(ego: Any, frame: DecisionFrame, others: list[Any]) -> float:
