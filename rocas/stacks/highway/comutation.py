@@ -7,8 +7,9 @@
    :func:`rocas.analysis.diff`; the walk from the control channel names the initial deviating
    module.
 3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
-   accident scene, screened one parameter at a time first, for the smallest change that
-   avoids the accident; the fix is shrunk to the fewest parameters.
+   accident scene, screened one parameter at a time first; the best few fixes are shrunk
+   (fewest parameters, then smallest changes) and the smallest change that avoids the accident
+   wins.
 4. **Validation**: the fix on seeded variants of the accident scene that still crash.
 
 Budgets are counted in simulations; simulations run on ``rocas.search.executor`` workers.
@@ -27,13 +28,15 @@ import numpy as np
 from rocas.errors import NotReproducedError
 from rocas.search import Mutation, MutationSpace, SearchConfig, Variable, run_search
 from rocas.search.executor import Executor, SerialExecutor
-from rocas.search.minimize import shrink_set
+from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
 from rocas.search.objectives import ego_dissimilarity
 from rocas.stacks.highway.params import parameters
 from rocas.stacks.highway.scene import KINDS, Scene
 from rocas.stacks.highway.world import RunResult, simulate
 
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
+#: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
+SHRINK_CANDIDATES = 4
 
 
 def run_task(task: SimTask) -> RunResult:
@@ -63,6 +66,7 @@ class Analysis:
         deviating_module: the diff's initial deviating module (None without a reference).
         searched_module: whose parameters the cyber search changed ("driver": all of them).
         fix: parameter full name -> value (empty when no fix was found).
+        alternatives: the other shrunk fixes, smallest change first.
         fix_run: the accident scene with the fix (None without a fix).
         validated: variants the fix avoids, of ``variants`` that crash unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
@@ -75,6 +79,7 @@ class Analysis:
     deviating_module: str | None
     searched_module: str | None
     fix: Mapping[str, float]
+    alternatives: tuple[Mapping[str, float], ...]
     fix_run: RunResult | None
     validated: int
     variants: int
@@ -84,8 +89,10 @@ class Analysis:
     def summary(self) -> str:
         s, n = self.seconds, self.simulations
         fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
+        others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
+                           for a in self.alternatives) or "none"
         return (f"{self.accident.scene.name}: module {self.deviating_module} "
-                f"(searched {self.searched_module}); fix {fix}; validated "
+                f"(searched {self.searched_module}); fix {fix} (other fixes: {others}); validated "
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
                 f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
@@ -167,11 +174,12 @@ def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner
 
 
 def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
-           ) -> dict[str, float]:
+           ) -> list[dict[str, float]]:
+    """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
     current = dict(accident.params)
     space = cyber_space(module, current)
     if not space.variables:
-        return {}
+        return []
     until = _until(accident)
 
     def tasks(ms: list[Mutation]) -> list[SimTask]:
@@ -188,13 +196,28 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     result = run_search(space, evaluate, cfg, 2,
                         screening_suffices=lambda cs: any(c.feasible for c in cs))
     if not result.feasible:
-        return {}
-    # fewest parameters, then the fix that keeps the ego's drive before the accident best
-    # (h1), then the smallest change (h2)
-    best = min(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[1],
-                                               c.objectives[0], c.mutation.names))
-    fix, _ = shrink_set(best.mutation, lambda ms: [not r.accident for r in runner.runs(tasks(ms))])
-    return {k: float(v) for k, v in fix.values.items()}
+        return []
+    # as the built-in pipeline does: the best few fixes with distinct parameter sets and
+    # directions are shrunk (fewest parameters, then each change towards its original value)
+    # and the smallest change wins; the drive kept before the accident breaks ties
+    candidates: list[Mutation] = []
+    seen: set[tuple[tuple[str, bool], ...]] = set()
+    for c in sorted(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
+                                                    c.objectives[1], c.mutation.names)):
+        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(c.mutation.values.items()))
+        if key not in seen and len(candidates) < SHRINK_CANDIDATES:
+            seen.add(key)
+            candidates.append(c.mutation)
+
+    def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
+        return [not r.accident for r in runner.runs(tasks([m for _, m in trials]))]
+
+    smalls, _ = shrink_sets(candidates, holds)
+    smalls, _ = shrink_all_magnitudes(smalls, space, holds)
+    h1 = {id(m): ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)
+          for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
+    ranked = sorted(dict.fromkeys(smalls), key=lambda m: (space.distance(m), h1[id(m)], m.names))
+    return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 
 def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
@@ -244,10 +267,11 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     # every driver parameter; so does a named module whose own parameters hold no fix
     searched = module if module in ("planning", "control") else "driver"
     t0, before = time.perf_counter(), runner.count
-    fix = _cyber(accident, searched, runner, budget, seed)
-    if searched != "driver" and not fix:
+    fixes = _cyber(accident, searched, runner, budget, seed)
+    if searched != "driver" and not fixes:
         searched = "driver"
-        fix = _cyber(accident, searched, runner, budget, seed)
+        fixes = _cyber(accident, searched, runner, budget, seed)
+    fix = fixes[0] if fixes else {}
     secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
     t0, before = time.perf_counter(), runner.count
     fix_run, validated, variants = None, 0, 0
@@ -260,5 +284,6 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         variants = len(crashing)
         validated = sum(not r.accident for r in runner.runs([(v, fixed, seed) for v in crashing]))
     secs["validation"], sims["validation"] = time.perf_counter() - t0, runner.count - before
-    return Analysis(accident, reference, dict(change.values), module, searched, fix, fix_run,
+    return Analysis(accident, reference, dict(change.values), module, searched, fix,
+                    tuple(fixes[1:]), fix_run,
                     validated, variants, secs, sims)
