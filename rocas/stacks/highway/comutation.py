@@ -70,7 +70,8 @@ class Analysis:
         fix_run: the accident scene with the fix (None without a fix).
         validated: variants the fix avoids, of ``variants`` that crash unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
-        simulations: simulations per phase (physical, cyber, validation).
+        simulations: simulations per phase (physical, with the accident's own run; diff, the
+            two recorded runs; cyber; validation).
     """
 
     accident: RunResult
@@ -96,7 +97,8 @@ class Analysis:
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
                 f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
-                f"{n['physical']}, cyber {n['cyber']}, validation {n['validation']})")
+                f"{n['physical']}, diff {n['diff']}, cyber {n['cyber']}, validation "
+                f"{n['validation']})")
 
 
 def physical_space(scene: Scene) -> MutationSpace:
@@ -170,7 +172,7 @@ def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner
         return None, Mutation()
     best = min(result.feasible, key=lambda c: (c.objectives[0], c.objectives[1]))
     ref_scene = apply_physical(scene, best.mutation)
-    return run_task((ref_scene, params, accident.seed)), best.mutation
+    return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation
 
 
 def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
@@ -244,13 +246,13 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
 
     runner = _Runner(executor or SerialExecutor())
     p = tuple(sorted((params or {}).items()))
-    accident = run_task((scene, p, seed))
+    t0 = time.perf_counter()
+    accident = runner.runs([(scene, p, seed)])[0]
     if not accident.accident:
         raise NotReproducedError(f"{scene.name}: no accident at seed {seed} with these "
                                  "parameters", "check the scene and the parameters")
     secs: dict[str, float] = {}
     sims: dict[str, int] = {}
-    t0 = time.perf_counter()
     reference, change = _physical(accident, p, runner, budget, seed)
     secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
     module = None
@@ -261,7 +263,7 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
             record(scene, a, dict(p), seed)
             record(reference.scene, b, dict(p), seed)
             module = diff(a, b).deviating_module
-    secs["diff"] = time.perf_counter() - t0
+    secs["diff"], sims["diff"] = time.perf_counter() - t0, 2 if reference is not None else 0
     # perception, the vehicle and the world have no parameters: a walk that ends there (the
     # reference changed the traffic, which the driver perceives exactly) leaves the search to
     # every driver parameter; so does a named module whose own parameters hold no fix
@@ -277,7 +279,7 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     fix_run, validated, variants = None, 0, 0
     if fix:
         fixed = tuple(sorted({**dict(p), **fix}.items()))
-        fix_run = run_task((scene, fixed, seed))
+        fix_run = runner.runs([(scene, fixed, seed)])[0]
         vs = scene_variants(scene, budget.validation_variants, seed)
         unfixed = runner.runs([(v, p, seed) for v in vs])
         crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
