@@ -37,6 +37,9 @@ from rocas.stacks.highway.world import RunResult, simulate
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
 #: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
 SHRINK_CANDIDATES = 4
+#: a fix must keep the ego this far from everything [m]: one that shaves the accident into a
+#: near miss has repaired nothing (and shrinking would stop at the first miss by millimetres)
+FIX_MARGIN_M = 0.5
 
 
 def run_task(task: SimTask) -> RunResult:
@@ -201,7 +204,8 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
         return []
     # as the built-in pipeline does: the best few fixes with distinct parameter sets and
     # directions are shrunk (fewest parameters, then each change towards its original value)
-    # and the smallest change wins; the drive kept before the accident breaks ties
+    # while they keep FIX_MARGIN_M, and the smallest change wins (a near miss ranks last); the
+    # drive kept before the accident breaks ties
     candidates: list[Mutation] = []
     seen: set[tuple[tuple[str, bool], ...]] = set()
     for c in sorted(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
@@ -211,14 +215,18 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
             seen.add(key)
             candidates.append(c.mutation)
 
+    def repairs(r: RunResult) -> bool:
+        return not r.accident and r.min_margin_m >= FIX_MARGIN_M
+
     def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
-        return [not r.accident for r in runner.runs(tasks([m for _, m in trials]))]
+        return [repairs(r) for r in runner.runs(tasks([m for _, m in trials]))]
 
     smalls, _ = shrink_sets(candidates, holds)
     smalls, _ = shrink_all_magnitudes(smalls, space, holds)
-    h1 = {id(m): ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)
-          for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
-    ranked = sorted(dict.fromkeys(smalls), key=lambda m: (space.distance(m), h1[id(m)], m.names))
+    runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
+    ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
+        not repairs(runs[id(m)]), space.distance(m),
+        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 

@@ -67,8 +67,8 @@ class RunResult:
         off_road_t_s: when [s] (None if never).
         min_ttc_s: smallest time to collision with the front vehicle in the ego's lane [s]
             (inf when it never closed in).
-        min_margin_m: smallest clearance between the ego's box and another's, in the ego's
-            frame (:func:`_margin`) [m].
+        min_margin_m: smallest clearance between the ego's box and another vehicle's or a road
+            object's, in the ego's frame (:func:`_margin`) [m].
     """
 
     scene: Scene
@@ -194,7 +194,7 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
         other_rows.append([(v.position[0], v.position[1], v.heading, v.speed)
                            for v in sim.others])
         min_ttc = min(min_ttc, _ttc(ego, frame, sim.others))
-        min_margin = min(min_margin, _margin(ego, sim.others))
+        min_margin = min(min_margin, _margin(ego, [*sim.others, *road.objects]))
         road.step(dt)
         if ego.crashed:
             collided, t_collision, hit = True, t + dt, _hit(ego, sim)
