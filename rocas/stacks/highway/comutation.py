@@ -133,11 +133,19 @@ def apply_physical(scene: Scene, m: Mutation) -> Scene:
 
 def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
     """The module's parameters (every driver parameter for ``"driver"``) over their ParamSpec
-    ranges, from their current values."""
-    return MutationSpace(tuple(
-        Variable(p.full_name, p.module, "real", float(current.get(p.full_name, p.default)),
-                 p.low, p.high, unit=p.unit)
-        for p in parameters() if module in (p.module, "driver")))
+    ranges, from their current values; the stack's braking and margin limits may only rise
+    (:class:`rocas.stacks.highway.stack.HighwayStack`)."""
+    from rocas.stacks.highway.stack import HighwayStack
+
+    floors = {*HighwayStack.braking_limits, *HighwayStack.margin_limits}
+    out = []
+    for p in parameters():
+        if module not in (p.module, "driver"):
+            continue
+        value = float(current.get(p.full_name, p.default))
+        low = max(p.low, value) if p.full_name in floors else p.low
+        out.append(Variable(p.full_name, p.module, "real", value, low, p.high, unit=p.unit))
+    return MutationSpace(tuple(out))
 
 
 class _Runner:

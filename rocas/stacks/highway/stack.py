@@ -26,6 +26,9 @@ class HighwayStack:
     modules: tuple[str, ...] = MODULES
     #: a cyber search may not lower this (a "fix" that brakes less only hides the accident)
     braking_limits: tuple[str, ...] = ("control.ACC_MAX",)
+    #: ... nor IDM's gaps to the front vehicle (a "fix" that follows closer only hides the
+    #: accident)
+    margin_limits: tuple[str, ...] = ("planning.TIME_WANTED", "planning.DISTANCE_WANTED")
 
     @property
     def parameters(self) -> tuple[ParamSpec, ...]:

@@ -25,13 +25,17 @@ def test_the_physical_space_mutates_the_other_vehicles_only():
     assert mutated.ego == scene.ego and mutated.others[2:] == scene.others[2:]
 
 
-def test_the_cyber_space_is_the_module_parameters_within_their_ranges():
+def test_the_cyber_space_is_the_module_parameters_within_their_ranges_and_limits():
     space = cyber_space("control", {"control.ACC_MAX": 1.82})
     specs = {p.full_name: p for p in parameters() if p.module == "control"}
     assert {v.name for v in space.variables} == set(specs)
     for v in space.variables:
-        assert (v.low, v.high) == (specs[v.name].low, specs[v.name].high)
+        assert v.high == specs[v.name].high
+        assert v.low == (1.82 if v.name == "control.ACC_MAX" else specs[v.name].low)
     assert space.variable("control.ACC_MAX").original == 1.82
+    gaps = cyber_space("planning", {"planning.TIME_WANTED": 0.3})
+    assert gaps.variable("planning.TIME_WANTED").low == 0.3  # a fix may not follow closer
+    assert gaps.variable("planning.POLITENESS").low == 0.0
     assert len(cyber_space("driver", {}).variables) == len(parameters())
 
 
