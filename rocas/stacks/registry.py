@@ -19,6 +19,7 @@ from rocas.stacks.base import Stack
 _BUILTIN = {
     "ads": "rocas.stacks.ads.adapter:ads_stack",
     "lav": "rocas.stacks.lav.stack:lav_stack",
+    "highway": "rocas.stacks.highway.stack:highway_stack",
 }
 _registered: dict[str, Stack] = {}
 #: registered at run time (not built-in), in registration order: what workers must also know

@@ -1,0 +1,1 @@
+"""The highway stack's accident catalog: TOML files read by :mod:`rocas.stacks.highway.accidents`."""

@@ -1,0 +1,317 @@
+"""Co-mutation in highway-env: physical search, diff, cyber search, validation.
+
+1. **Physical**: a genetic search (:func:`rocas.search.run_search`) over the scene's other
+   vehicles (position on the lane, speed, target speed, class) for a near-identical scene in
+   which the ego, driven by the same parameters, has no accident: the reference.
+2. **Diff**: the accident and the reference are recorded and compared with
+   :func:`rocas.analysis.diff`; the walk from the control channel names the initial deviating
+   module.
+3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
+   accident scene, screened one parameter at a time first; the best few fixes are shrunk
+   (fewest parameters, then smallest changes) and the smallest change that avoids the accident
+   wins.
+4. **Validation**: every shrunk fix on seeded variants of the accident scene that still
+   crash; the fix that avoids the accident on the most of them is the answer.
+
+Budgets are counted in simulations; simulations run on ``rocas.search.executor`` workers.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from rocas.errors import NotReproducedError
+from rocas.search import Mutation, MutationSpace, SearchConfig, Variable, run_search
+from rocas.search.executor import Executor, SerialExecutor
+from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
+from rocas.search.objectives import ego_dissimilarity
+from rocas.stacks.highway.params import parameters
+from rocas.stacks.highway.scene import KINDS, Scene
+from rocas.stacks.highway.world import RunResult, simulate
+
+SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
+#: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
+SHRINK_CANDIDATES = 4
+#: a fix must keep the ego this far from everything [m]: one that shaves the accident into a
+#: near miss has repaired nothing (and shrinking would stop at the first miss by millimetres)
+FIX_MARGIN_M = 0.5
+
+
+def run_task(task: SimTask) -> RunResult:
+    """One simulation (module level, so worker processes can run it)."""
+    scene, params, seed = task
+    return simulate(scene, dict(params), seed)
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Simulations each phase may spend (a search may stop earlier)."""
+
+    physical_population: int = 12
+    physical_generations: int = 3
+    cyber_population: int = 12
+    cyber_generations: int = 2
+    validation_variants: int = 6
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """What the co-mutation found for one accident.
+
+    Attributes:
+        accident: the accident run; reference: the physical search's reference (None if none).
+        reference_change: what the reference changes in the scene.
+        deviating_module: the diff's initial deviating module (None without a reference).
+        searched_module: whose parameters the cyber search changed ("driver": all of them).
+        fix: parameter full name -> value (empty when no fix was found).
+        alternatives: the other shrunk fixes, smallest change first.
+        fix_run: the accident scene with the fix (None without a fix).
+        validated: variants the fix avoids, of ``variants`` that crash unfixed.
+        seconds: wall time per phase (physical, diff, cyber, validation).
+        simulations: simulations per phase (physical, with the accident's own run; diff, the
+            two recorded runs; cyber; validation).
+    """
+
+    accident: RunResult
+    reference: RunResult | None
+    reference_change: Mapping[str, object]
+    deviating_module: str | None
+    searched_module: str | None
+    fix: Mapping[str, float]
+    alternatives: tuple[Mapping[str, float], ...]
+    fix_run: RunResult | None
+    validated: int
+    variants: int
+    seconds: Mapping[str, float]
+    simulations: Mapping[str, int]
+
+    def summary(self) -> str:
+        s, n = self.seconds, self.simulations
+        fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
+        others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
+                           for a in self.alternatives) or "none"
+        return (f"{self.accident.scene.name}: module {self.deviating_module} "
+                f"(searched {self.searched_module}); fix {fix} (other fixes: {others}); validated "
+                f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
+                f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
+                f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
+                f"{n['physical']}, diff {n['diff']}, cyber {n['cyber']}, validation "
+                f"{n['validation']})")
+
+
+def physical_space(scene: Scene) -> MutationSpace:
+    """Each other vehicle's lane position (+-15 m), speed and target speed (+-4 m/s) and
+    class."""
+    out: list[Variable] = []
+    for i, v in enumerate(scene.others, start=1):
+        target = v.speed_mps if v.target_speed_mps is None else v.target_speed_mps
+        out += [Variable(f"v{i}.s", f"v{i}", "real", v.s_m, v.s_m - 15.0, v.s_m + 15.0, unit="m"),
+                Variable(f"v{i}.speed", f"v{i}", "real", v.speed_mps, max(0.0, v.speed_mps - 4),
+                         v.speed_mps + 4, unit="m/s"),
+                Variable(f"v{i}.target_speed", f"v{i}", "real", target, max(0.0, target - 4),
+                         target + 4, unit="m/s"),
+                Variable(f"v{i}.kind", f"v{i}", "enum", v.kind, choices=KINDS)]
+    return MutationSpace(tuple(out))
+
+
+def apply_physical(scene: Scene, m: Mutation) -> Scene:
+    """The scene with a physical mutation applied."""
+    others = list(scene.others)
+    fields = {"s": "s_m", "speed": "speed_mps", "target_speed": "target_speed_mps",
+              "kind": "kind"}
+    for name, value in m.values.items():
+        who, prop = name.split(".", 1)
+        i = int(who[1:]) - 1
+        others[i] = replace(others[i], **{fields[prop]: value})
+    return replace(scene, others=tuple(others))
+
+
+def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
+    """The module's parameters (every driver parameter for ``"driver"``) over their ParamSpec
+    ranges, from their current values; the stack's braking and margin limits may only rise
+    (:class:`rocas.stacks.highway.stack.HighwayStack`)."""
+    from rocas.stacks.highway.stack import HighwayStack
+
+    floors = {*HighwayStack.braking_limits, *HighwayStack.margin_limits}
+    out = []
+    for p in parameters():
+        if module not in (p.module, "driver"):
+            continue
+        value = float(current.get(p.full_name, p.default))
+        low = max(p.low, value) if p.full_name in floors else p.low
+        out.append(Variable(p.full_name, p.module, "real", value, low, p.high, unit=p.unit))
+    return MutationSpace(tuple(out))
+
+
+class _Runner:
+    """Counts simulations and maps them over an executor."""
+
+    def __init__(self, executor: Executor) -> None:
+        self.executor = executor
+        self.count = 0
+
+    def runs(self, tasks: Sequence[SimTask]) -> list[RunResult]:
+        self.count += len(tasks)
+        return self.executor.map(run_task, list(tasks))
+
+
+def _until(accident: RunResult) -> int:
+    return max(1, len(accident.times) - 1)
+
+
+def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner: _Runner,
+              budget: Budget, seed: int) -> tuple[RunResult | None, Mutation]:
+    scene = accident.scene
+    space = physical_space(scene)
+    until = _until(accident)
+
+    def evaluate(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        runs = runner.runs([(apply_physical(scene, m), params, accident.seed) for m in ms])
+        return [((space.distance(m), ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)),
+                 r.constraint()) for m, r in zip(ms, runs, strict=True)]
+
+    cfg = SearchConfig(population=budget.physical_population,
+                       generations=budget.physical_generations, seed=seed,
+                       single_property_share=0.5, stop_when_feasible_after=1)
+    result = run_search(space, evaluate, cfg, 2)
+    if not result.feasible:
+        return None, Mutation()
+    best = min(result.feasible, key=lambda c: (c.objectives[0], c.objectives[1]))
+    ref_scene = apply_physical(scene, best.mutation)
+    return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation
+
+
+def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
+           ) -> list[dict[str, float]]:
+    """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
+    current = dict(accident.params)
+    space = cyber_space(module, current)
+    if not space.variables:
+        return []
+    until = _until(accident)
+
+    def tasks(ms: list[Mutation]) -> list[SimTask]:
+        return [(accident.scene, tuple(sorted({**current, **m.values}.items())), accident.seed)
+                for m in ms]
+
+    def evaluate(ms: list[Mutation]) -> list[tuple[tuple[float, ...], float]]:
+        runs = runner.runs(tasks(ms))
+        return [((space.distance(m), ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)),
+                 r.constraint()) for m, r in zip(ms, runs, strict=True)]
+
+    cfg = SearchConfig(population=budget.cyber_population, generations=budget.cyber_generations,
+                       seed=seed, screen=True, stop_when_feasible_after=1)
+    result = run_search(space, evaluate, cfg, 2,
+                        screening_suffices=lambda cs: any(c.feasible for c in cs))
+    if not result.feasible:
+        return []
+    # as the built-in pipeline does: the best few fixes with distinct parameter sets and
+    # directions are shrunk (fewest parameters, then each change towards its original value)
+    # while they keep FIX_MARGIN_M, and the smallest change wins (a near miss ranks last); the
+    # drive kept before the accident breaks ties
+    candidates: list[Mutation] = []
+    seen: set[tuple[tuple[str, bool], ...]] = set()
+    for c in sorted(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
+                                                    c.objectives[1], c.mutation.names)):
+        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(c.mutation.values.items()))
+        if key not in seen and len(candidates) < SHRINK_CANDIDATES:
+            seen.add(key)
+            candidates.append(c.mutation)
+
+    def repairs(r: RunResult) -> bool:
+        return not r.accident and r.min_margin_m >= FIX_MARGIN_M
+
+    def holds(trials: list[tuple[int, Mutation]]) -> list[bool]:
+        return [repairs(r) for r in runner.runs(tasks([m for _, m in trials]))]
+
+    smalls, _ = shrink_sets(candidates, holds)
+    smalls, _ = shrink_all_magnitudes(smalls, space, holds)
+    runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
+    ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
+        not repairs(runs[id(m)]), space.distance(m),
+        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until), m.names))
+    return [{k: float(v) for k, v in m.values.items()} for m in ranked]
+
+
+def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
+    """Seeded small perturbations of the other vehicles (+-2 m, +-0.5 m/s)."""
+    rng = np.random.default_rng([seed, 3939])
+    out = []
+    for _ in range(count):
+        others = tuple(replace(o, s_m=o.s_m + float(rng.uniform(-2, 2)),
+                               speed_mps=max(0.0, o.speed_mps + float(rng.uniform(-0.5, 0.5))))
+                       for o in scene.others)
+        out.append(replace(scene, others=others))
+    return out
+
+
+def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int = 0, *,
+            executor: Executor | None = None, budget: Budget = Budget()) -> Analysis:
+    """The co-mutation on one accident (``scene`` with the ego parameters ``params``).
+
+    Raises:
+        NotReproducedError: the scene has no accident with these parameters.
+    """
+    from rocas.analysis.diff import diff
+    from rocas.stacks.highway.record import record
+
+    runner = _Runner(executor or SerialExecutor())
+    p = tuple(sorted((params or {}).items()))
+    t0 = time.perf_counter()
+    accident = runner.runs([(scene, p, seed)])[0]
+    if not accident.accident:
+        raise NotReproducedError(f"{scene.name}: no accident at seed {seed} with these "
+                                 "parameters", "check the scene and the parameters")
+    secs: dict[str, float] = {}
+    sims: dict[str, int] = {}
+    reference, change = _physical(accident, p, runner, budget, seed)
+    secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
+    module = None
+    t0 = time.perf_counter()
+    if reference is not None:
+        with tempfile.TemporaryDirectory(prefix="rocas-highway-") as tmp:
+            a, b = Path(tmp, "accident.mcap"), Path(tmp, "reference.mcap")
+            record(scene, a, dict(p), seed)
+            record(reference.scene, b, dict(p), seed)
+            module = diff(a, b).deviating_module
+    secs["diff"], sims["diff"] = time.perf_counter() - t0, 2 if reference is not None else 0
+    # perception, the vehicle and the world have no parameters: a walk that ends there (the
+    # reference changed the traffic, which the driver perceives exactly) leaves the search to
+    # every driver parameter; so does a named module whose own parameters hold no fix
+    searched = module if module in ("planning", "control") else "driver"
+    t0, before = time.perf_counter(), runner.count
+    fixes = _cyber(accident, searched, runner, budget, seed)
+    if searched != "driver" and not fixes:
+        searched = "driver"
+        fixes = _cyber(accident, searched, runner, budget, seed)
+    fix: dict[str, float] = {}
+    secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
+    t0, before = time.perf_counter(), runner.count
+    fix_run, validated, variants = None, 0, 0
+    if fixes:
+        # the variants that still crash unfixed; each shrunk fix is tried on them and the one
+        # that avoids the most wins (ties: smallest change): a fix that only shifted a
+        # decision's timing in this one scene rarely survives them
+        vs = scene_variants(scene, budget.validation_variants, seed)
+        unfixed = runner.runs([(v, p, seed) for v in vs])
+        crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
+        variants = len(crashing)
+        tried = runner.runs([(v, tuple(sorted({**dict(p), **f}.items())), seed)
+                             for f in fixes for v in crashing])
+        n = len(crashing)
+        scores = [sum(not r.accident for r in tried[i * n:(i + 1) * n])
+                  for i in range(len(fixes))]
+        best = max(range(len(fixes)), key=lambda i: (scores[i], -i))
+        fixes = [fixes[best], *fixes[:best], *fixes[best + 1:]]
+        fix, validated = fixes[0], scores[best]
+        fix_run = runner.runs([(scene, tuple(sorted({**dict(p), **fix}.items())), seed)])[0]
+    secs["validation"], sims["validation"] = time.perf_counter() - t0, runner.count - before
+    return Analysis(accident, reference, dict(change.values), module, searched, fix,
+                    tuple(fixes[1:]), fix_run,
+                    validated, variants, secs, sims)

@@ -1,0 +1,55 @@
+"""Co-mutation on highway-env: the spaces, and one catalog accident end to end (slow)."""
+
+import pytest
+
+pytest.importorskip("highway_env")
+
+from rocas.search import Mutation  # noqa: E402
+from rocas.stacks.highway.accidents import entry  # noqa: E402
+from rocas.stacks.highway.comutation import (  # noqa: E402
+    analyze,
+    apply_physical,
+    cyber_space,
+    physical_space,
+    scene_variants,
+)
+from rocas.stacks.highway.params import parameters  # noqa: E402
+
+
+def test_the_physical_space_mutates_the_other_vehicles_only():
+    scene = entry("h01").scene
+    space = physical_space(scene)
+    assert len(space.variables) == 4 * len(scene.others)
+    mutated = apply_physical(scene, Mutation({"v1.speed": 5.0, "v2.kind": "defensive"}))
+    assert mutated.others[0].speed_mps == 5.0 and mutated.others[1].kind == "defensive"
+    assert mutated.ego == scene.ego and mutated.others[2:] == scene.others[2:]
+
+
+def test_the_cyber_space_is_the_module_parameters_within_their_ranges_and_limits():
+    space = cyber_space("control", {"control.ACC_MAX": 1.82})
+    specs = {p.full_name: p for p in parameters() if p.module == "control"}
+    assert {v.name for v in space.variables} == set(specs)
+    for v in space.variables:
+        assert v.high == specs[v.name].high
+        assert v.low == (1.82 if v.name == "control.ACC_MAX" else specs[v.name].low)
+    assert space.variable("control.ACC_MAX").original == 1.82
+    gaps = cyber_space("planning", {"planning.TIME_WANTED": 0.3})
+    assert gaps.variable("planning.TIME_WANTED").low == 0.3  # a fix may not follow closer
+    assert gaps.variable("planning.POLITENESS").low == 0.0
+    assert len(cyber_space("driver", {}).variables) == len(parameters())
+
+
+def test_scene_variants_are_seeded():
+    scene = entry("h01").scene
+    assert scene_variants(scene, 3, 0) == scene_variants(scene, 3, 0)
+    assert scene_variants(scene, 3, 0) != scene_variants(scene, 3, 1)
+
+
+@pytest.mark.slow
+def test_the_analysis_of_weak_brakes_restores_the_acceleration_limit():
+    e = entry("h01")
+    result = analyze(e.scene, e.params, e.seed)
+    assert result.reference is not None and not result.reference.accident
+    assert set(result.fix) == {"control.ACC_MAX"} and result.fix["control.ACC_MAX"] > 1.82
+    assert result.fix_run is not None and not result.fix_run.accident
+    assert sum(result.simulations.values()) > 0
