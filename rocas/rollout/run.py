@@ -56,10 +56,19 @@ def load_scenario(spec: str) -> Scenario:
     return check_params(resolve_scenario(spec), spec)
 
 
+def _in_our_world(stack: Stack) -> None:
+    """Refuse a stack that declares another simulator's world (it has its own rollout)."""
+    world = getattr(stack, "world", None)
+    if world:
+        raise UsageError(f"stack {stack.name!r} drives in {world}'s world, not rocas's own",
+                         f"run it with its own tools (python -m {type(stack).__module__.rsplit('.', 1)[0]})")
+
+
 def _factory(stack: Stack, sets: Sequence[StackParams], oracle_modules: OracleModules
              ) -> Callable[[BatchWorld], object]:
     """What the engine builds the stack with: every parameter as an (N,) array, and the
     modules to substitute when the stack declares that it can."""
+    _in_our_world(stack)
     params = batch_params(sets)
     if not oracle_modules:
         return lambda world: stack.build(world, params)

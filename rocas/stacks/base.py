@@ -147,9 +147,12 @@ class AlphaBetaTracker:
 #: - ``catalog``: the folder of :mod:`rocas.catalog` holding its accident catalog;
 #:   ``recordings``: the subfolder of the repository's ``recordings/`` with its catalog's
 #:   recordings (default: its name); ``variant_families``: its catalog takes
-#:   :mod:`rocas.catalog.variants`' families (``rocas catalog generate --family``).
+#:   :mod:`rocas.catalog.variants`' families (``rocas catalog generate --family``);
+#: - ``world``: the name of another simulator's world it drives in (highway-env's for the
+#:   ``highway`` stack); such a stack has its own rollout, and :mod:`rocas.rollout` refuses it.
 CAPABILITIES = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace_limits",
-                "substitutable", "records_rows", "catalog", "recordings", "variant_families")
+                "substitutable", "records_rows", "catalog", "recordings", "variant_families",
+                "world")
 
 
 @runtime_checkable

@@ -16,6 +16,9 @@ from rocas.stacks import registry
 from rocas.stacks.base import CAPABILITIES, SelfSimulating, StackParams
 
 NAMES = registry.names()
+#: the stacks built into rocas's own world (a stack declaring another simulator's ``world`` has
+#: its own rollout and its own tests: tests/stacks/highway)
+OURS = [n for n in NAMES if not getattr(registry.get_stack(n), "world", None)]
 
 
 def _scenario(name: str, duration_s: float = 3.0):
@@ -29,8 +32,23 @@ def stack(request):
     return registry.get_stack(request.param)
 
 
+@pytest.fixture(params=OURS)
+def ours(request):
+    return registry.get_stack(request.param)
+
+
 def test_every_built_in_stack_is_checked():
-    assert {"ads", "lav"} <= set(NAMES)
+    assert {"ads", "lav"} <= set(OURS) and "highway" in NAMES
+
+
+def test_the_rollout_refuses_a_stack_of_another_world(tmp_path):
+    from rocas.errors import UsageError
+
+    others = [n for n in NAMES if n not in OURS]
+    assert others
+    for name in others:
+        with pytest.raises(UsageError, match="world, not rocas's own"):
+            rollout(registry.get_stack(name), _scenario("ads"), None, 0)
 
 
 def test_the_parameter_inventory_is_well_formed(stack):
@@ -67,10 +85,11 @@ def test_declared_capabilities_have_the_documented_shapes(stack):
     if "tracker" in declared:
         tracker = stack.tracker({})
         assert tracker is None or 0 < tracker.position_gain <= 1
-    assert not isinstance(stack, SelfSimulating)  # built into rocas's world
+    assert not isinstance(stack, SelfSimulating)  # built into a world, not a command
 
 
-def test_a_run_is_deterministic(stack):
+def test_a_run_is_deterministic(ours):
+    stack = ours
     s = _scenario(stack.name)
     a, b = rollout(stack, s, None, 3), rollout(stack, s, None, 3)
     np.testing.assert_array_equal(a.ego, b.ego)
@@ -78,7 +97,8 @@ def test_a_run_is_deterministic(stack):
     assert a.outcome == b.outcome
 
 
-def test_a_variant_does_not_depend_on_its_batch(stack):
+def test_a_variant_does_not_depend_on_its_batch(ours):
+    stack = ours
     s = _scenario(stack.name)
     p = stack.parameters[-1]
     params = [None, {p.full_name: p.low}, None]
@@ -91,7 +111,8 @@ def test_a_variant_does_not_depend_on_its_batch(stack):
     assert batch.digests.shape == (3, len(stack.modules))
 
 
-def test_a_recording_round_trips_and_replay_reads_it(stack, tmp_path):
+def test_a_recording_round_trips_and_replay_reads_it(ours, tmp_path):
+    stack = ours
     from rocas.replay import reconstruct, replay
 
     s = _scenario(stack.name, 4.0)

@@ -23,6 +23,8 @@ class HighwayStack:
     """highway-env's IDMVehicle as the system under test."""
 
     name = "highway"
+    #: the world it drives in (rocas.stacks.base.CAPABILITIES): highway-env's, not rocas's
+    world = "highway-env"
     modules: tuple[str, ...] = MODULES
     #: a cyber search may not lower this (a "fix" that brakes less only hides the accident)
     braking_limits: tuple[str, ...] = ("control.ACC_MAX",)

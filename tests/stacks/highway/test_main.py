@@ -4,7 +4,7 @@ import pytest
 
 pytest.importorskip("highway_env")
 
-from rocas.recording.reader import open_recording  # noqa: E402
+from rocas.recording.formats import open_recording  # noqa: E402
 from rocas.stacks.highway.__main__ import main  # noqa: E402
 
 

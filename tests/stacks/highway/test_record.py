@@ -5,7 +5,7 @@ import pytest
 pytest.importorskip("highway_env")
 
 from rocas.analysis.diff import diff  # noqa: E402
-from rocas.recording.reader import open_recording  # noqa: E402
+from rocas.recording.formats import open_recording  # noqa: E402
 from rocas.stacks.highway.record import (  # noqa: E402
     TOPIC_COMMAND,
     TOPIC_DECISION,
