@@ -63,33 +63,9 @@ def test_has_display():
     assert has_display({"DISPLAY": ":0"}) and has_display({"WAYLAND_DISPLAY": "wayland-0"})
 
 
-class _FakeViewer:
-    """Stands in for ``subprocess.Popen`` of the ``rerun`` executable."""
-
-    def __init__(self, exit_code=None, stderr=b""):
-        self.exit_code, self.stderr_bytes, self.argv = exit_code, stderr, None
-
-    def __call__(self, argv, **kwargs):
-        import io
-        import subprocess
-
-        self.argv = argv
-        fake = self
-
-        class Proc:
-            pid = 4242
-            stderr = io.BytesIO(fake.stderr_bytes)
-
-            def wait(self, timeout=None):
-                if fake.exit_code is None:
-                    raise subprocess.TimeoutExpired(argv, timeout)
-                return fake.exit_code
-
-        return Proc()
-
-
-def test_native_view_leaves_the_file_to_the_viewer(rocas, red_truck_recording, monkeypatch):
-    viewer = _FakeViewer()
+def test_native_view_leaves_the_file_to_the_viewer(rocas, red_truck_recording, monkeypatch,
+                                                   fake_viewer):
+    viewer = fake_viewer()
     monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
     monkeypatch.setattr("subprocess.Popen", viewer)
     res = rocas("view", red_truck_recording)
@@ -104,9 +80,10 @@ def test_native_view_leaves_the_file_to_the_viewer(rocas, red_truck_recording, m
     shown.parent.rmdir()
 
 
-def test_native_view_reports_a_viewer_that_fails(rocas, red_truck_recording, monkeypatch, tmp_path):
+def test_native_view_reports_a_viewer_that_fails(rocas, red_truck_recording, monkeypatch, tmp_path,
+                                                  fake_viewer):
     monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
-    monkeypatch.setattr("subprocess.Popen", _FakeViewer(1, b"starting\nError: no GPU adapter\n"))
+    monkeypatch.setattr("subprocess.Popen", fake_viewer(1, b"starting\nError: no GPU adapter\n"))
     res = rocas("view", red_truck_recording, "--rrd", tmp_path / "v.rrd")
     assert res.code != 0 and "exited at once with status 1: Error: no GPU adapter" in res.stderr
     assert "Opened" not in res.stdout and "Started" not in res.stdout

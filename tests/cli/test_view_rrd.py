@@ -6,31 +6,6 @@ import sys
 import pytest
 
 
-class _FakeViewer:
-    """(as in test_view.py) Stands in for ``subprocess.Popen`` of the ``rerun`` executable."""
-
-    def __init__(self, exit_code=None, stderr=b""):
-        self.exit_code, self.stderr_bytes, self.argv = exit_code, stderr, None
-
-    def __call__(self, argv, **kwargs):
-        import io
-        import subprocess
-
-        self.argv = argv
-        fake = self
-
-        class Proc:
-            pid = 4242
-            stderr = io.BytesIO(fake.stderr_bytes)
-
-            def wait(self, timeout=None):
-                if fake.exit_code is None:
-                    raise subprocess.TimeoutExpired(argv, timeout)
-                return fake.exit_code
-
-        return Proc()
-
-
 def _serve_view(args, env=None):
     """Start ``rocas view ...`` serving; return the process and its first line of output."""
     import os
@@ -62,8 +37,8 @@ def rrd(tmp_path_factory, red_truck_recording):
     return path
 
 
-def test_a_native_viewer_is_given_the_file_itself(rocas, rrd, monkeypatch):
-    viewer = _FakeViewer()
+def test_a_native_viewer_is_given_the_file_itself(rocas, rrd, monkeypatch, fake_viewer):
+    viewer = fake_viewer()
     monkeypatch.setattr("rocas.cli.view.has_display", lambda: True)
     monkeypatch.setattr("subprocess.Popen", viewer)
     res = rocas("view", rrd)
