@@ -206,6 +206,7 @@ def test_analyze_names_the_trigger_module_and_parameter_or_no_fix(tmp_path, type
     rep = analyze(RECORDINGS / f"{e.key}.mcap", tmp_path / "run",
                   AnalyzeConfig(seed=0, validation_variants=8, alternate_references=0,
                                 second_opinion=False))
+    rep = rep.to_json()
     marks = score(_expected(e.truth), _found(rep))
     assert marks == {"verdict": True, "module": True, "parameter": True, "trigger": True,
                      "hit": True}, _found(rep)

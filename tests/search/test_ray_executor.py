@@ -65,8 +65,8 @@ def test_same_seed_same_report_as_the_local_executor(ray_executor, tmp_path):
     scenario = dataclasses.replace(load_example("roundabout_red_truck"), duration_s=9.0)
     cfg = AnalyzeConfig(seed=1, budget=16, population=8, validation_variants=4)
     with LocalExecutor(workers=2) as local:
-        expected = analyze(scenario, tmp_path / "local", cfg, executor=local)
-    got = analyze(scenario, tmp_path / "ray", cfg, executor=ray_executor)
+        expected = analyze(scenario, tmp_path / "local", cfg, executor=local).to_json()
+    got = analyze(scenario, tmp_path / "ray", cfg, executor=ray_executor).to_json()
     expected.pop("timings_s")
     got.pop("timings_s")
     assert got == expected

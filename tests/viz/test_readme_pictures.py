@@ -68,7 +68,7 @@ def test_the_analysis_pictures_facts_are_the_current_codes(tmp_path):
 
     report = analyze(ROOT / "recordings" / "a09_red_truck_roundabout.mcap", tmp_path / "run",
                      AnalyzeConfig())
-    assert _script().report_facts(report) == _sidecar("rerun-view")["facts"]
+    assert _script().report_facts(report.to_json()) == _sidecar("rerun-view")["facts"]
 
 
 @pytest.mark.slow  # a triage of three shipped accidents, about 30 s of CPU
