@@ -91,13 +91,25 @@ class Analysis:
     seconds: Mapping[str, float]
     simulations: Mapping[str, int]
 
+    @property
+    def module(self) -> str | None:
+        """The answer's deviating module: the diff's, revised to the fix's module when the fix
+        changes one module's parameters and the diff named another (its walk ended at a module
+        without parameters, or the named module's own parameters held no fix), as the
+        built-in pipeline's cyber phase revises the diff's module for a second suspect's fix."""
+        owners = {name.split(".", 1)[0] for name in self.fix}
+        if len(owners) == 1 and self.deviating_module not in owners:
+            return owners.pop()
+        return self.deviating_module
+
     def summary(self) -> str:
         s, n = self.seconds, self.simulations
         fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
         others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
                            for a in self.alternatives) or "none"
-        return (f"{self.accident.scene.name}: module {self.deviating_module} "
-                f"(searched {self.searched_module}); fix {fix} (other fixes: {others}); validated "
+        return (f"{self.accident.scene.name}: module {self.module} (diff "
+                f"{self.deviating_module}, searched {self.searched_module}); fix {fix} "
+                f"(other fixes: {others}); validated "
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
                 f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
@@ -252,8 +264,11 @@ def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
 
 
 def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int = 0, *,
-            executor: Executor | None = None, budget: Budget = Budget()) -> Analysis:
-    """The co-mutation on one accident (``scene`` with the ego parameters ``params``).
+            executor: Executor | None = None, budget: Budget = Budget(),
+            search_seed: int | None = None) -> Analysis:
+    """The co-mutation on one accident (``scene`` with the ego parameters ``params``, simulated
+    at ``seed``); ``search_seed`` seeds the searches and the validation variants (default
+    ``seed``), so one recorded accident can be analysed at several seeds.
 
     Raises:
         NotReproducedError: the scene has no accident with these parameters.
@@ -270,7 +285,8 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
                                  "parameters", "check the scene and the parameters")
     secs: dict[str, float] = {}
     sims: dict[str, int] = {}
-    reference, change = _physical(accident, p, runner, budget, seed)
+    sseed = seed if search_seed is None else search_seed
+    reference, change = _physical(accident, p, runner, budget, sseed)
     secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
     module = None
     t0 = time.perf_counter()
@@ -286,10 +302,10 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     # every driver parameter; so does a named module whose own parameters hold no fix
     searched = module if module in ("planning", "control") else "driver"
     t0, before = time.perf_counter(), runner.count
-    fixes = _cyber(accident, searched, runner, budget, seed)
+    fixes = _cyber(accident, searched, runner, budget, sseed)
     if searched != "driver" and not fixes:
         searched = "driver"
-        fixes = _cyber(accident, searched, runner, budget, seed)
+        fixes = _cyber(accident, searched, runner, budget, sseed)
     fix: dict[str, float] = {}
     secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
     t0, before = time.perf_counter(), runner.count
@@ -298,7 +314,7 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         # the variants that still crash unfixed; each shrunk fix is tried on them and the one
         # that avoids the most wins (ties: smallest change): a fix that only shifted a
         # decision's timing in this one scene rarely survives them
-        vs = scene_variants(scene, budget.validation_variants, seed)
+        vs = scene_variants(scene, budget.validation_variants, sseed)
         unfixed = runner.runs([(v, p, seed) for v in vs])
         crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
         variants = len(crashing)
