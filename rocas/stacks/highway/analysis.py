@@ -39,9 +39,9 @@ def read_accident(path: str | os.PathLike[str]) -> tuple[Scene, dict[str, float]
     from rocas.recording.reader import Recording
     from rocas.stacks.highway.record import SCENE_ATTACHMENT
 
-    rec = Recording(path)
-    data = rec.attachment(SCENE_ATTACHMENT)
+    rec = Recording(path).scan()
     meta = dict(rec.metadata).get(EGO_METADATA)
+    data = rec.attachment(SCENE_ATTACHMENT)
     if data is None or meta is None:
         raise InputError(f"{path}: no highway scene in this recording",
                          "record it with python -m rocas.stacks.highway record")
