@@ -37,7 +37,7 @@ from rocas.stacks.highway.world import RunResult, simulate
 
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
 #: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
-SHRINK_CANDIDATES = 4
+SHRINK_CANDIDATES = 6
 #: a fix must keep the ego this far from everything [m]: one that shaves the accident into a
 #: near miss has repaired nothing (and shrinking would stop at the first miss by millimetres)
 FIX_MARGIN_M = 0.5
@@ -147,17 +147,23 @@ def apply_physical(scene: Scene, m: Mutation) -> Scene:
 def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
     """The module's parameters (every driver parameter for ``"driver"``) over their ParamSpec
     ranges, from their current values; the stack's braking and margin limits may only rise
+    and its comfort limits may only grow in magnitude
     (:class:`rocas.stacks.highway.stack.HighwayStack`)."""
     from rocas.stacks.highway.stack import HighwayStack
 
     floors = {*HighwayStack.braking_limits, *HighwayStack.margin_limits}
+    comfort = set(HighwayStack.comfort_limits)
     out = []
     for p in parameters():
         if module not in (p.module, "driver"):
             continue
         value = float(current.get(p.full_name, p.default))
-        low = max(p.low, value) if p.full_name in floors else p.low
-        out.append(Variable(p.full_name, p.module, "real", value, low, p.high, unit=p.unit))
+        low, high = p.low, p.high
+        if p.full_name in floors or (p.full_name in comfort and value >= 0):
+            low = max(p.low, value)
+        elif p.full_name in comfort:
+            high = min(p.high, value)  # a deceleration: its magnitude may grow, not shrink
+        out.append(Variable(p.full_name, p.module, "real", value, low, high, unit=p.unit))
     return MutationSpace(tuple(out))
 
 

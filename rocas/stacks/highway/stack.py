@@ -32,6 +32,10 @@ class HighwayStack:
     #: ... nor IDM's gaps to the front vehicle (a "fix" that follows closer only hides the
     #: accident)
     margin_limits: tuple[str, ...] = ("planning.TIME_WANTED", "planning.DISTANCE_WANTED")
+    #: ... nor shrink IDM's comfort accelerations (the ride's specification, not a tuning
+    #: knob: a "fix" that asks for gentler acceleration or braking changes what the ride is
+    #: allowed to feel, so the ego creeps up on the accident instead of avoiding it)
+    comfort_limits: tuple[str, ...] = ("planning.COMFORT_ACC_MAX", "planning.COMFORT_ACC_MIN")
 
     @property
     def parameters(self) -> tuple[ParamSpec, ...]:
