@@ -55,16 +55,15 @@ def read_accident(path: str | os.PathLike[str]) -> tuple[Scene, dict[str, float]
 
 def trigger(a: Analysis) -> tuple[str | None, str | None]:
     """The triggering entity and property: the reference's largest change of one vehicle's
-    property, as a share of that property's search range (an enum change counts as whole)."""
+    property, as a share of that property's search range (an enum change counts as whole,
+    :meth:`rocas.search.space.Variable.change`)."""
     if not a.reference_change:
         return None, None
     spans = {v.name: v for v in physical_space(a.accident.scene).variables}
 
     def share(name: str) -> float:
-        v, value = spans[name], a.reference_change[name]
-        if v.kind == "enum":
-            return 1.0
-        return abs(float(value) - float(v.value)) / ((v.high - v.low) or 1.0)  # type: ignore[arg-type]
+        v = spans[name]
+        return v.change(a.reference_change[name])
 
     best = max(sorted(a.reference_change), key=share)
     who, prop = best.split(".", 1)

@@ -8,8 +8,9 @@
    module.
 3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
    accident scene, screened one parameter at a time first; the best few fixes are shrunk
-   (fewest parameters, then smallest changes) and the smallest change that avoids the accident
-   wins.
+   (fewest parameters, then smallest changes) and, among those with the fewest parameters,
+   the one whose drive departs least from the accident's wins (then the smallest change); a
+   parameter that repairs when moved either way ranks last.
 4. **Validation**: every shrunk fix on seeded variants of the accident scene that still
    crash; the fix that avoids the accident on the most of them is the answer.
 
@@ -205,6 +206,34 @@ def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner
     return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation
 
 
+def quarter_points(space: MutationSpace) -> list[Mutation]:
+    """Each variable alone a quarter and three quarters of the way from its original value to
+    each end of its range (the screening's halfway points and ends lie between)."""
+    out = []
+    for var in space.variables:
+        u0 = var.encode(var.original)
+        for end in (0.0, 1.0):
+            for share in (0.25, 0.75):
+                m = Mutation({var.name: var.decode(u0 + share * (end - u0))})
+                if var.change(m.values[var.name]) > 0:
+                    out.append(m)
+    return list(dict.fromkeys(out))
+
+
+def _shrink_candidates(found: Sequence[tuple[Mutation, tuple[float, ...]]],
+                       current: Mapping[str, float]) -> list[Mutation]:
+    """The fixes worth shrinking: per parameter set and direction the least change that
+    repairs, and of those the SHRINK_CANDIDATES with the fewest parameters whose drive departs
+    least from the accident's (objectives: change, dissimilarity)."""
+    least: dict[tuple[tuple[str, bool], ...], tuple[Mutation, tuple[float, ...]]] = {}
+    for m, obj in sorted(found, key=lambda f: (f[1][0], f[1][1], f[0].names)):
+        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(m.values.items()))
+        least.setdefault(key, (m, obj))
+    ranked = sorted(least.values(), key=lambda f: (len(f[0].values), f[1][1], f[1][0],
+                                                   f[0].names))
+    return [m for m, _ in ranked[:SHRINK_CANDIDATES]]
+
+
 def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
            ) -> list[dict[str, float]]:
     """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
@@ -227,20 +256,16 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
                        seed=seed, screen=True, stop_when_feasible_after=1)
     result = run_search(space, evaluate, cfg, 2,
                         screening_suffices=lambda cs: any(c.feasible for c in cs))
-    if not result.feasible:
+    # the screening tries each parameter at its range's ends and halfway to them; a fix that
+    # lies between (a heading gain that repairs from 20 /s only below 7 /s, and overshoots at
+    # 0.5 /s) is found by the quarter points, tried here one parameter at a time
+    scan = quarter_points(space)
+    found = [(c.mutation, c.objectives) for c in result.feasible]
+    found += [(m, objectives) for m, (objectives, constraint)
+              in zip(scan, evaluate(scan), strict=True) if constraint <= 0]
+    if not found:
         return []
-    # as the built-in pipeline does: the best few fixes with distinct parameter sets and
-    # directions are shrunk (fewest parameters, then each change towards its original value)
-    # while they keep FIX_MARGIN_M, and the smallest change wins (a near miss ranks last); the
-    # drive kept before the accident breaks ties
-    candidates: list[Mutation] = []
-    seen: set[tuple[tuple[str, bool], ...]] = set()
-    for c in sorted(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
-                                                    c.objectives[1], c.mutation.names)):
-        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(c.mutation.values.items()))
-        if key not in seen and len(candidates) < SHRINK_CANDIDATES:
-            seen.add(key)
-            candidates.append(c.mutation)
+    candidates = _shrink_candidates(found, current)
 
     def repairs(r: RunResult) -> bool:
         return not r.accident and r.min_margin_m >= FIX_MARGIN_M
@@ -251,9 +276,25 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     smalls, _ = shrink_sets(candidates, holds)
     smalls, _ = shrink_all_magnitudes(smalls, space, holds)
     runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
+    # the counterfactual closest to the accident wins: among repairing fixes with the fewest
+    # parameters, the one whose drive departs least from the accident's (the paper's second
+    # objective), then the smallest change. A change that is small in its parameter's range
+    # may still remake the drive (a stiffer lateral gain damping a heading oscillation the
+    # accident's heading gain caused); the shrunk fixes all lie at their repair's edge, so
+    # their sizes say less than what they do to the drive
+    # ... and a parameter that repairs when moved either way ranks after the rest: the
+    # accident hangs on its exact value (MOBIL's decision phase at the ramp's end), not on it
+    # being too high or too low, so no direction of it is the cause
+    fixed = [m for m in dict.fromkeys(smalls) if repairs(runs[id(m)])]
+    ways = {(n, float(v) > current.get(n, 0.0)) for m in fixed for n, v in m.values.items()}
+
+    def two_way(m: Mutation) -> bool:
+        return any((n, float(v) <= current.get(n, 0.0)) in ways for n, v in m.values.items())
+
     ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
-        not repairs(runs[id(m)]), space.distance(m),
-        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until), m.names))
+        not repairs(runs[id(m)]), len(m.values), two_way(m),
+        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until),
+        space.distance(m), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 

@@ -67,3 +67,16 @@ def test_analyze_refuses_a_pipeline_only_option(rocas, tmp_path, capsys):
     capsys.readouterr()
     res = rocas("analyze", tmp_path / "h06.mcap", "--scope", "all", "--out", tmp_path / "run")
     assert res.code == 2 and "does not take --scope" in res.stderr
+
+
+def test_the_trigger_is_the_references_largest_change():
+    from rocas.search.executor import SerialExecutor
+    from rocas.stacks.highway.accidents import entry
+    from rocas.stacks.highway.analysis import trigger
+    from rocas.stacks.highway.comutation import analyze
+
+    e = entry("h01")
+    a = analyze(e.scene, e.params, e.seed, executor=SerialExecutor())
+    assert a.reference is not None and a.reference_change
+    who, prop = trigger(a)
+    assert f"{who}.{prop}" in a.reference_change
