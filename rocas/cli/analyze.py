@@ -129,6 +129,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
             raise InputError(f"no such file: {source}", "check the path")
         name = source.stem
+        own = _own_analysis(source)
+        if own is not None:
+            return _run_own_analysis(own, args, env)
     # the name comes from the scenario or the file: one harmless component under runs/, never
     # a path of its own (an absolute name or ../.. would put the run anywhere)
     out = Path(args.out) if args.out else Path("runs") / safe_component(name)
@@ -204,17 +207,13 @@ def _use_stack_file(path: str, source: Any, out: Path) -> str:
         UsageError: the file is unreadable or its command simulates another stack.
     """
     from rocas.errors import UsageError
-    from rocas.scenarios.model import DEFAULT_STACK
     from rocas.stacks.external import ExternalStack
     from rocas.stacks.registry import register
 
     ext = ExternalStack.from_file(Path(path).resolve(), (out / "external").resolve())
     if isinstance(source, Path):
-        from rocas.recording.formats import open_recording
-        from rocas.recording.topology import STACK_METADATA
 
-        meta = dict(open_recording(str(source)).scan().metadata)
-        wanted = meta.get(STACK_METADATA, {}).get("name", DEFAULT_STACK)
+        wanted = _recording_stack(source)
     else:
         wanted = source.ego.stack
     if ext.stack != wanted:
@@ -222,6 +221,67 @@ def _use_stack_file(path: str, source: Any, out: Path) -> str:
                          f"is {wanted!r}", f'declare stack = "{wanted}" in the stack file')
     register(ext, replace=True)
     return ext.name
+
+
+def _recording_stack(path: Path) -> str:
+    """The stack a recording names in its ``rocas.stack`` metadata (the default stack when it
+    names none)."""
+    from rocas.recording.formats import open_recording
+    from rocas.recording.topology import STACK_METADATA
+    from rocas.scenarios.model import DEFAULT_STACK
+
+    meta = dict(open_recording(str(path)).scan().metadata)
+    return str(meta.get(STACK_METADATA, {}).get("name", DEFAULT_STACK))
+
+
+def _own_analysis(path: Path) -> Callable[..., Any] | None:
+    """The recording's stack's own ``analyze_recording`` when the stack declares one (a stack
+    that drives in another simulator's world analyses there; rocas.stacks.base.CAPABILITIES),
+    else None. A recording that cannot be read here is left to the analysis, which reports
+    why."""
+    from rocas.errors import RocasError
+    from rocas.stacks.registry import get_stack
+
+    try:
+        stack = get_stack(_recording_stack(path))
+    except RocasError:
+        return None
+    return getattr(stack, "analyze_recording", None)
+
+
+#: options of ``rocas analyze`` a stack's own analysis takes (the others are rocas's pipeline's)
+_OWN_ANALYSIS_OPTIONS = ("source", "out", "seed", "workers", "executor", "json", "quiet")
+
+
+def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: Env) -> int:
+    """``rocas analyze`` of a recording whose stack analyses in its own world.
+
+    Raises:
+        UsageError: an option only rocas's own pipeline reads was given.
+    """
+    from rocas.errors import UsageError
+
+    defaults = argparse.ArgumentParser()
+    add_arguments(defaults)
+    given = [k for k, v in vars(defaults.parse_args([args.source])).items()
+             if k not in _OWN_ANALYSIS_OPTIONS and getattr(args, k, v) != v]
+    if given:
+        raise UsageError(f"this recording's stack analyses in its own world, which does not take "
+                         f"--{given[0].replace('_', '-')}",
+                         "options it takes: --out, --seed, --workers, --executor, --json, "
+                         "--quiet")
+    out = Path(args.out) if args.out else Path("runs") / safe_component(Path(args.source).stem)
+    if args.out:
+        check_parent_exists(out)
+    report = own(Path(args.source), out, seed=args.seed, workers=args.workers,
+                 executor=args.executor)
+    if args.json:
+        env.stdout.write(json_dumps(report.to_json(), indent=2) + "\n")
+    else:
+        for line in report.lines():
+            env.out().print(safe(line))
+        env.out().print(f"Run directory: {safe(str(out))}")
+    return ExitStatus.SUCCESS
 
 
 def kept_after_interrupt(out: Path, rrd: str | None) -> str:

@@ -11,6 +11,7 @@ from rocas.catalog import shipped_recordings
 from rocas.cli.analyze import add_search_arguments
 from rocas.cli.console import Env, safe
 from rocas.scenarios.model import DEFAULT_STACK
+from rocas.stacks.registry import get_stack
 
 HELP = "run rocas analyze over the accident catalog and print Table 4 with hit/miss marks"
 
@@ -20,7 +21,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", default="runs/bench", help="where run directories go")
     p.add_argument("--stack", default=DEFAULT_STACK, metavar="NAME",
                    help="score this stack's catalog (default ads, the built-in ADS; lav: the "
-                        "LAV-like stack's, recordings in recordings/lav/)")
+                        "LAV-like stack's, recordings in recordings/lav/; highway: highway-env's "
+                        "IDM/MOBIL driver, benched in its own world)")
     p.add_argument("--recordings", metavar="DIR", default=None,
                    help="directory with the catalog recordings (default recordings/, or "
                         "recordings/NAME/ with --stack NAME)")
@@ -49,6 +51,9 @@ def run(args: argparse.Namespace, env: Env) -> int:
     from rocas.pipeline.bench import run_bench, run_bench_seeds
     from rocas.pipeline.config import AnalyzeConfig
 
+    own = getattr(get_stack(args.stack), "bench", None)
+    if own is not None:
+        return _run_own_bench(own, args, env)
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
@@ -73,6 +78,46 @@ def run(args: argparse.Namespace, env: Env) -> int:
         render_seeds(res, env)
     else:
         render(res, env)
+    return 0
+
+
+#: options of ``rocas bench`` a stack's own bench takes (the others are rocas's pipeline's)
+_OWN_BENCH_OPTIONS = ("ids", "out", "stack", "seed", "seeds", "workers", "json")
+
+
+def _run_own_bench(own: Any, args: argparse.Namespace, env: Env) -> int:
+    """``rocas bench --stack NAME`` for a stack that declares its own bench (it analyses in
+    its own world; rocas.stacks.base.CAPABILITIES): the same table, per seed with --seeds.
+
+    Raises:
+        UsageError: an option only rocas's own pipeline reads was given.
+    """
+    from rocas.errors import UsageError
+
+    defaults = argparse.ArgumentParser()
+    add_arguments(defaults)
+    given = [k for k, v in vars(defaults.parse_args([])).items()
+             if k not in _OWN_BENCH_OPTIONS and getattr(args, k, v) != v]
+    if given:
+        raise UsageError(f"stack {args.stack} benches in its own world, which does not take "
+                         f"--{given[0].replace('_', '-')}",
+                         "options it takes: --out, --seed, --seeds, --workers, --json")
+    out = Path(args.out)
+    res = own(args.ids, args.seeds or [args.seed], workers=args.workers,
+              progress=lambda msg: print(msg, file=env.stderr, flush=True))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "bench.json").write_text(json_dumps(res, indent=1) + "\n")
+    if args.json:
+        env.stdout.write(json_dumps(res, indent=2) + "\n")
+        return 0
+    for seed, one in zip(res["seeds"], res["runs"], strict=True):
+        if args.seeds:
+            env.out().print(f"[bold]Seed {seed}[/bold]")
+        render(one, env)
+    if args.seeds:
+        render_seeds(res, env)
+    elif res["median_seconds"] is not None:
+        env.out().print(f"Median analysis: {res['median_seconds']:.1f} s")
     return 0
 
 

@@ -149,10 +149,17 @@ class AlphaBetaTracker:
 #:   recordings (default: its name); ``variant_families``: its catalog takes
 #:   :mod:`rocas.catalog.variants`' families (``rocas catalog generate --family``);
 #: - ``world``: the name of another simulator's world it drives in (highway-env's for the
-#:   ``highway`` stack); such a stack has its own rollout, and :mod:`rocas.rollout` refuses it.
+#:   ``highway`` stack); such a stack has its own rollout, and :mod:`rocas.rollout` refuses it;
+#: - ``analyze_recording(path, out, *, seed, workers, executor) -> report``: its own analysis
+#:   of one of its recordings (a stack of another world analyses there), which ``rocas
+#:   analyze`` runs instead of rocas's pipeline; the report has ``to_json()`` (``--json``) and
+#:   ``lines()`` (the terminal);
+#: - ``bench(ids, seeds, *, workers, progress) -> dict``: its own catalog analysed and scored
+#:   once per seed, in the rows :func:`rocas.pipeline.bench.run_bench_seeds` returns, which
+#:   ``rocas bench --stack NAME`` prints as it prints the built-in bench.
 CAPABILITIES = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace_limits",
                 "substitutable", "records_rows", "catalog", "recordings", "variant_families",
-                "world")
+                "world", "analyze_recording", "bench")
 
 
 @runtime_checkable

@@ -72,8 +72,10 @@ def main(argv: list[str] | None = None) -> int:
             hit = restores(a.fix, name, value, defaults[name])
             among = hit or any(restores(f, name, value, defaults[name]) for f in a.alternatives)
             module = name.split(".")[0]
-            rows.append((name, hit, a.deviating_module == module, took, among))
-            print(f"{scene.name:14} {name:42} {value:7.3g} -> module {a.deviating_module} "
+            rows.append((name, hit, a.deviating_module == module, took, among,
+                         a.module == module))
+            print(f"{scene.name:14} {name:42} {value:7.3g} -> module {a.module} (diff "
+                  f"{a.deviating_module}) "
                   f"fix {dict(a.fix)} {'HIT' if hit else 'among others' if among else 'MISS'} {took:.1f} s "
                   f"({sum(a.simulations.values())} sims)", flush=True)
     finally:
@@ -91,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
           f"({100 * sum(r[4] for r in rows) / n:.1f} %)")
     print(f"diff named the injected parameter's module: {sum(r[2] for r in rows)}/{n} "
           f"({100 * sum(r[2] for r in rows) / n:.1f} %)")
+    print(f"the answer's module (the diff's, revised to the fix's): {sum(r[5] for r in rows)}/{n} "
+          f"({100 * sum(r[5] for r in rows) / n:.1f} %)")
     print(f"time per accident: min {min(times):.1f} s, median {statistics.median(times):.1f} s")
     for name in sorted({r[0] for r in rows}):
         mine = [r for r in rows if r[0] == name]

@@ -86,6 +86,9 @@ def test_declared_capabilities_have_the_documented_shapes(stack):
         tracker = stack.tracker({})
         assert tracker is None or 0 < tracker.position_gain <= 1
     assert not isinstance(stack, SelfSimulating)  # built into a world, not a command
+    for own in ("analyze_recording", "bench"):
+        # rocas's pipeline analyses a stack of its own world: only another world's brings its own
+        assert own not in declared or ("world" in declared and callable(getattr(stack, own))), own
 
 
 def test_a_run_is_deterministic(ours):

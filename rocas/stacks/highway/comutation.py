@@ -8,8 +8,9 @@
    module.
 3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
    accident scene, screened one parameter at a time first; the best few fixes are shrunk
-   (fewest parameters, then smallest changes) and the smallest change that avoids the accident
-   wins.
+   (fewest parameters, then smallest changes) and, among those with the fewest parameters,
+   the one whose drive departs least from the accident's wins (then the smallest change); a
+   parameter that repairs when moved either way ranks last.
 4. **Validation**: every shrunk fix on seeded variants of the accident scene that still
    crash; the fix that avoids the accident on the most of them is the answer.
 
@@ -37,7 +38,7 @@ from rocas.stacks.highway.world import RunResult, simulate
 
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
 #: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
-SHRINK_CANDIDATES = 4
+SHRINK_CANDIDATES = 6
 #: a fix must keep the ego this far from everything [m]: one that shaves the accident into a
 #: near miss has repaired nothing (and shrinking would stop at the first miss by millimetres)
 FIX_MARGIN_M = 0.5
@@ -91,13 +92,25 @@ class Analysis:
     seconds: Mapping[str, float]
     simulations: Mapping[str, int]
 
+    @property
+    def module(self) -> str | None:
+        """The answer's deviating module: the diff's, revised to the fix's module when the fix
+        changes one module's parameters and the diff named another (its walk ended at a module
+        without parameters, or the named module's own parameters held no fix), as the
+        built-in pipeline's cyber phase revises the diff's module for a second suspect's fix."""
+        owners = {name.split(".", 1)[0] for name in self.fix}
+        if len(owners) == 1 and self.deviating_module not in owners:
+            return owners.pop()
+        return self.deviating_module
+
     def summary(self) -> str:
         s, n = self.seconds, self.simulations
         fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
         others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
                            for a in self.alternatives) or "none"
-        return (f"{self.accident.scene.name}: module {self.deviating_module} "
-                f"(searched {self.searched_module}); fix {fix} (other fixes: {others}); validated "
+        return (f"{self.accident.scene.name}: module {self.module} (diff "
+                f"{self.deviating_module}, searched {self.searched_module}); fix {fix} "
+                f"(other fixes: {others}); validated "
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
                 f"{s['validation']:.1f} s; simulations {sum(n.values())} (physical "
@@ -135,17 +148,23 @@ def apply_physical(scene: Scene, m: Mutation) -> Scene:
 def cyber_space(module: str, current: Mapping[str, float]) -> MutationSpace:
     """The module's parameters (every driver parameter for ``"driver"``) over their ParamSpec
     ranges, from their current values; the stack's braking and margin limits may only rise
+    and its comfort limits may only grow in magnitude
     (:class:`rocas.stacks.highway.stack.HighwayStack`)."""
     from rocas.stacks.highway.stack import HighwayStack
 
     floors = {*HighwayStack.braking_limits, *HighwayStack.margin_limits}
+    comfort = set(HighwayStack.comfort_limits)
     out = []
     for p in parameters():
         if module not in (p.module, "driver"):
             continue
         value = float(current.get(p.full_name, p.default))
-        low = max(p.low, value) if p.full_name in floors else p.low
-        out.append(Variable(p.full_name, p.module, "real", value, low, p.high, unit=p.unit))
+        low, high = p.low, p.high
+        if p.full_name in floors or (p.full_name in comfort and value >= 0):
+            low = max(p.low, value)
+        elif p.full_name in comfort:
+            high = min(p.high, value)  # a deceleration: its magnitude may grow, not shrink
+        out.append(Variable(p.full_name, p.module, "real", value, low, high, unit=p.unit))
     return MutationSpace(tuple(out))
 
 
@@ -187,6 +206,34 @@ def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner
     return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation
 
 
+def quarter_points(space: MutationSpace) -> list[Mutation]:
+    """Each variable alone a quarter and three quarters of the way from its original value to
+    each end of its range (the screening's halfway points and ends lie between)."""
+    out = []
+    for var in space.variables:
+        u0 = var.encode(var.original)
+        for end in (0.0, 1.0):
+            for share in (0.25, 0.75):
+                m = Mutation({var.name: var.decode(u0 + share * (end - u0))})
+                if var.change(m.values[var.name]) > 0:
+                    out.append(m)
+    return list(dict.fromkeys(out))
+
+
+def _shrink_candidates(found: Sequence[tuple[Mutation, tuple[float, ...]]],
+                       current: Mapping[str, float]) -> list[Mutation]:
+    """The fixes worth shrinking: per parameter set and direction the least change that
+    repairs, and of those the SHRINK_CANDIDATES with the fewest parameters whose drive departs
+    least from the accident's (objectives: change, dissimilarity)."""
+    least: dict[tuple[tuple[str, bool], ...], tuple[Mutation, tuple[float, ...]]] = {}
+    for m, obj in sorted(found, key=lambda f: (f[1][0], f[1][1], f[0].names)):
+        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(m.values.items()))
+        least.setdefault(key, (m, obj))
+    ranked = sorted(least.values(), key=lambda f: (len(f[0].values), f[1][1], f[1][0],
+                                                   f[0].names))
+    return [m for m, _ in ranked[:SHRINK_CANDIDATES]]
+
+
 def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
            ) -> list[dict[str, float]]:
     """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
@@ -209,20 +256,16 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
                        seed=seed, screen=True, stop_when_feasible_after=1)
     result = run_search(space, evaluate, cfg, 2,
                         screening_suffices=lambda cs: any(c.feasible for c in cs))
-    if not result.feasible:
+    # the screening tries each parameter at its range's ends and halfway to them; a fix that
+    # lies between (a heading gain that repairs from 20 /s only below 7 /s, and overshoots at
+    # 0.5 /s) is found by the quarter points, tried here one parameter at a time
+    scan = quarter_points(space)
+    found = [(c.mutation, c.objectives) for c in result.feasible]
+    found += [(m, objectives) for m, (objectives, constraint)
+              in zip(scan, evaluate(scan), strict=True) if constraint <= 0]
+    if not found:
         return []
-    # as the built-in pipeline does: the best few fixes with distinct parameter sets and
-    # directions are shrunk (fewest parameters, then each change towards its original value)
-    # while they keep FIX_MARGIN_M, and the smallest change wins (a near miss ranks last); the
-    # drive kept before the accident breaks ties
-    candidates: list[Mutation] = []
-    seen: set[tuple[tuple[str, bool], ...]] = set()
-    for c in sorted(result.feasible, key=lambda c: (len(c.mutation.values), c.objectives[0],
-                                                    c.objectives[1], c.mutation.names)):
-        key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(c.mutation.values.items()))
-        if key not in seen and len(candidates) < SHRINK_CANDIDATES:
-            seen.add(key)
-            candidates.append(c.mutation)
+    candidates = _shrink_candidates(found, current)
 
     def repairs(r: RunResult) -> bool:
         return not r.accident and r.min_margin_m >= FIX_MARGIN_M
@@ -233,9 +276,25 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     smalls, _ = shrink_sets(candidates, holds)
     smalls, _ = shrink_all_magnitudes(smalls, space, holds)
     runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
+    # the counterfactual closest to the accident wins: among repairing fixes with the fewest
+    # parameters, the one whose drive departs least from the accident's (the paper's second
+    # objective), then the smallest change. A change that is small in its parameter's range
+    # may still remake the drive (a stiffer lateral gain damping a heading oscillation the
+    # accident's heading gain caused); the shrunk fixes all lie at their repair's edge, so
+    # their sizes say less than what they do to the drive
+    # ... and a parameter that repairs when moved either way ranks after the rest: the
+    # accident hangs on its exact value (MOBIL's decision phase at the ramp's end), not on it
+    # being too high or too low, so no direction of it is the cause
+    fixed = [m for m in dict.fromkeys(smalls) if repairs(runs[id(m)])]
+    ways = {(n, float(v) > current.get(n, 0.0)) for m in fixed for n, v in m.values.items()}
+
+    def two_way(m: Mutation) -> bool:
+        return any((n, float(v) <= current.get(n, 0.0)) in ways for n, v in m.values.items())
+
     ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
-        not repairs(runs[id(m)]), space.distance(m),
-        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until), m.names))
+        not repairs(runs[id(m)]), len(m.values), two_way(m),
+        ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until),
+        space.distance(m), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 
@@ -252,8 +311,11 @@ def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
 
 
 def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int = 0, *,
-            executor: Executor | None = None, budget: Budget = Budget()) -> Analysis:
-    """The co-mutation on one accident (``scene`` with the ego parameters ``params``).
+            executor: Executor | None = None, budget: Budget = Budget(),
+            search_seed: int | None = None) -> Analysis:
+    """The co-mutation on one accident (``scene`` with the ego parameters ``params``, simulated
+    at ``seed``); ``search_seed`` seeds the searches and the validation variants (default
+    ``seed``), so one recorded accident can be analysed at several seeds.
 
     Raises:
         NotReproducedError: the scene has no accident with these parameters.
@@ -270,7 +332,8 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
                                  "parameters", "check the scene and the parameters")
     secs: dict[str, float] = {}
     sims: dict[str, int] = {}
-    reference, change = _physical(accident, p, runner, budget, seed)
+    sseed = seed if search_seed is None else search_seed
+    reference, change = _physical(accident, p, runner, budget, sseed)
     secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
     module = None
     t0 = time.perf_counter()
@@ -286,10 +349,10 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     # every driver parameter; so does a named module whose own parameters hold no fix
     searched = module if module in ("planning", "control") else "driver"
     t0, before = time.perf_counter(), runner.count
-    fixes = _cyber(accident, searched, runner, budget, seed)
+    fixes = _cyber(accident, searched, runner, budget, sseed)
     if searched != "driver" and not fixes:
         searched = "driver"
-        fixes = _cyber(accident, searched, runner, budget, seed)
+        fixes = _cyber(accident, searched, runner, budget, sseed)
     fix: dict[str, float] = {}
     secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
     t0, before = time.perf_counter(), runner.count
@@ -298,7 +361,7 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         # the variants that still crash unfixed; each shrunk fix is tried on them and the one
         # that avoids the most wins (ties: smallest change): a fix that only shifted a
         # decision's timing in this one scene rarely survives them
-        vs = scene_variants(scene, budget.validation_variants, seed)
+        vs = scene_variants(scene, budget.validation_variants, sseed)
         unfixed = runner.runs([(v, p, seed) for v in vs])
         crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
         variants = len(crashing)

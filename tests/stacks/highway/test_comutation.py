@@ -11,6 +11,7 @@ from rocas.stacks.highway.comutation import (  # noqa: E402
     apply_physical,
     cyber_space,
     physical_space,
+    quarter_points,
     scene_variants,
 )
 from rocas.stacks.highway.params import parameters  # noqa: E402
@@ -37,6 +38,23 @@ def test_the_cyber_space_is_the_module_parameters_within_their_ranges_and_limits
     assert gaps.variable("planning.TIME_WANTED").low == 0.3  # a fix may not follow closer
     assert gaps.variable("planning.POLITENESS").low == 0.0
     assert len(cyber_space("driver", {}).variables) == len(parameters())
+
+
+def test_the_comfort_accelerations_may_only_grow_in_magnitude():
+    space = cyber_space("planning", {"planning.COMFORT_ACC_MAX": 2.0,
+                                     "planning.COMFORT_ACC_MIN": -4.0})
+    assert space.variable("planning.COMFORT_ACC_MAX").low == 2.0  # no gentler acceleration
+    assert space.variable("planning.COMFORT_ACC_MIN").high == -4.0  # no gentler braking
+    assert space.variable("planning.COMFORT_ACC_MIN").low == -10.0
+
+
+def test_the_quarter_points_lie_between_the_screenings_points():
+    space = cyber_space("control", {"control.KP_HEADING": 20.0})
+    heading = sorted(m.values["control.KP_HEADING"] for m in quarter_points(space)
+                     if "control.KP_HEADING" in m.values)
+    # 20 /s is the top of its range: only the way down, a quarter and three quarters of it
+    assert heading == pytest.approx([20 - 0.75 * 19.5, 20 - 0.25 * 19.5])
+    assert all(len(m.values) == 1 for m in quarter_points(space))
 
 
 def test_scene_variants_are_seeded():
