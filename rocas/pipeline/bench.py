@@ -258,6 +258,16 @@ def run_bench_seeds(
     if len(set(seeds)) != len(seeds):
         raise UsageError(f"--seeds repeats a seed: {','.join(map(str, seeds))}", "name each seed once")
     runs = [run_bench(ids, out / f"seed-{s}", replace(cfg, seed=s), **kwargs) for s in seeds]
+    seconds = sorted(r["seconds"] for res in runs for r in res["entries"])
+    return {"stack": kwargs.get("stack", DEFAULT_STACK), **per_seed(seeds, runs),
+            "agreement_per_seed": {str(s): agreement_summary(res["entries"])
+                                   for s, res in zip(seeds, runs, strict=True)},
+            "median_seconds": seconds[len(seconds) // 2] if seconds else None}
+
+
+def per_seed(seeds: Sequence[int], runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The part of the ``--seeds`` object every stack's bench shares: the seeds, each seed's
+    bench (``runs``), the hits per seed, and per entry the seeds it hit at and what it found."""
     per_entry: dict[str, dict[str, Any]] = {}
     for s, res in zip(seeds, runs, strict=True):
         for r in res["entries"]:
@@ -267,12 +277,7 @@ def run_bench_seeds(
             row["found"][str(s)] = {"module": r["found"]["deviating_module"],
                                     "parameters": r["found"]["parameters"],
                                     "trigger": r["found"]["trigger_entity"]}
-    seconds = sorted(r["seconds"] for res in runs for r in res["entries"])
-    return {"stack": kwargs.get("stack", DEFAULT_STACK), "seeds": list(seeds), "runs": runs,
+    return {"seeds": list(seeds), "runs": list(runs),
             "hits_per_seed": {str(s): res["hits"] for s, res in zip(seeds, runs, strict=True)},
-            "total": runs[0]["total"],
-            "entries": list(per_entry.values()),
-            "every_seed": sum(all(row["hits"].values()) for row in per_entry.values()),
-            "agreement_per_seed": {str(s): agreement_summary(res["entries"])
-                                   for s, res in zip(seeds, runs, strict=True)},
-            "median_seconds": seconds[len(seconds) // 2] if seconds else None}
+            "total": runs[0]["total"], "entries": list(per_entry.values()),
+            "every_seed": sum(all(row["hits"].values()) for row in per_entry.values())}

@@ -200,21 +200,10 @@ def bench(ids: Sequence[str] | None, seeds: Sequence[int], *, workers: int | Non
         runs = [_bench_one(chosen, s, ex, progress) for s in seeds]
     finally:
         ex.close()
-    per_entry: dict[str, dict[str, Any]] = {}
-    for s, res in zip(seeds, runs, strict=True):
-        for r in res["entries"]:
-            row = per_entry.setdefault(r["id"], {"id": r["id"], "type": r["type"], "hits": {},
-                                                 "found": {}})
-            row["hits"][str(s)] = r["hit"]
-            row["found"][str(s)] = {"module": r["found"]["deviating_module"],
-                                    "parameters": r["found"]["parameters"],
-                                    "trigger": r["found"]["trigger_entity"]}
+    from rocas.pipeline.bench import per_seed
+
     seconds = [r["seconds"] for res in runs for r in res["entries"]]
-    return {"stack": "highway", "seeds": list(seeds), "runs": runs,
-            "hits_per_seed": {str(s): res["hits"] for s, res in zip(seeds, runs, strict=True)},
-            "total": runs[0]["total"], "entries": list(per_entry.values()),
-            "every_seed": sum(all(row["hits"].values()) for row in per_entry.values()),
-            "agreement_per_seed": {},
+    return {"stack": "highway", **per_seed(seeds, runs), "agreement_per_seed": {},
             "median_seconds": statistics.median(seconds) if seconds else None,
             "min_seconds": min(seconds) if seconds else None}
 
