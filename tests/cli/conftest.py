@@ -1,9 +1,13 @@
-"""What the CLI tests share: a stand-in for the ``rerun`` viewer process."""
+"""What the CLI tests share: a stand-in for the ``rerun`` viewer process, and ``rocas view``
+serving without a display."""
 
 from __future__ import annotations
 
 import io
+import os
 import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -35,3 +39,22 @@ class FakeViewer:
 def fake_viewer():
     """``fake_viewer(exit_code=None, stderr=b"")`` -> a :class:`FakeViewer`."""
     return FakeViewer
+
+
+def _serve_view(args, env=None):
+    """Start ``rocas view ...`` serving without a display; return the process and its first
+    line of output."""
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
+               **(env or {}))
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.Popen([sys.executable, "-m", "rocas", "view", *map(str, args)], cwd=root,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return proc, proc.stdout.readline()
+
+
+@pytest.fixture
+def serve_view():
+    """``serve_view(args, env=None)`` -> (the ``rocas view`` process, its first line)."""
+    return _serve_view

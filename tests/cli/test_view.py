@@ -89,29 +89,12 @@ def test_native_view_reports_a_viewer_that_fails(rocas, red_truck_recording, mon
     assert "Opened" not in res.stdout and "Started" not in res.stdout
 
 
-def _serve_view(args, env=None):
-    """Start ``rocas view ...`` serving; return the process and its first line of output."""
-    import os
-    import subprocess
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[2]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
-               **(env or {}))
-    env.pop("DISPLAY", None)
-    env.pop("WAYLAND_DISPLAY", None)
-    proc = subprocess.Popen([sys.executable, "-m", "rocas", "view", *map(str, args)], cwd=root,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = proc.stdout.readline()
-    return proc, line
-
-
-def test_view_web_serves_on_loopback_only(red_truck_recording):
+def test_view_web_serves_on_loopback_only(red_truck_recording, serve_view):
     import signal
 
     from test_serve import listening, on_loopback
 
-    proc, line = _serve_view([red_truck_recording, "--web", "--web-port", "0", "--grpc-port", "0"])
+    proc, line = serve_view([red_truck_recording, "--web", "--web-port", "0", "--grpc-port", "0"])
     try:
         assert line.startswith("Rerun web viewer: http://127.0.0.1:"), (line, proc.stderr.read())
         assert "?url=rerun%2Bhttp://127.0.0.1:" in line

@@ -6,23 +6,6 @@ import sys
 import pytest
 
 
-def _serve_view(args, env=None):
-    """Start ``rocas view ...`` serving; return the process and its first line of output."""
-    import os
-    import subprocess
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[2]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
-               **(env or {}))
-    env.pop("DISPLAY", None)
-    env.pop("WAYLAND_DISPLAY", None)
-    proc = subprocess.Popen([sys.executable, "-m", "rocas", "view", *map(str, args)], cwd=root,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = proc.stdout.readline()
-    return proc, line
-
-
 @pytest.fixture(scope="module")
 def rrd(tmp_path_factory, red_truck_recording):
     import io
@@ -59,8 +42,8 @@ def test_rrd_copies_it_and_a_file_that_is_not_one_is_refused(rocas, rrd, tmp_pat
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child")
-def test_without_a_display_it_is_served_to_the_browser(rrd):
-    proc, line = _serve_view([rrd, "--web-port", "0", "--grpc-port", "0"])
+def test_without_a_display_it_is_served_to_the_browser(rrd, serve_view):
+    proc, line = serve_view([rrd, "--web-port", "0", "--grpc-port", "0"])
     try:
         assert line.startswith("Rerun web viewer: http://127.0.0.1:"), (line, proc.stderr.read())
     finally:
