@@ -18,13 +18,18 @@ import os
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rocas.scenarios.model import Scenario
 
+if TYPE_CHECKING:
+    from rocas.analysis.diff import DiffResult
+    from rocas.pipeline.report import Report
+    from rocas.sim.engine import RunResult
+
 
 def diff(accident: str | os.PathLike[str], reference: str | os.PathLike[str],
-         **options: Any) -> Any:
+         **options: Any) -> DiffResult:
     """Diff two recordings of one run and find the initial deviating module.
 
     ``options`` are :func:`rocas.analysis.diff.diff`'s (``bin_s``, ``delta_s``, ``atol``,
@@ -50,7 +55,7 @@ def _scenario(source: str | os.PathLike[str] | Scenario) -> Scenario:
 
 def simulate(scenario: str | os.PathLike[str] | Scenario,
              params: Mapping[str, float] | None = None, seed: int | None = None, *,
-             output: str | os.PathLike[str] | None = None) -> Any:
+             output: str | os.PathLike[str] | None = None) -> RunResult:
     """One run of a scenario (a :class:`~rocas.scenarios.Scenario`, a scenario file or an
     example's name) with the stack it names, ``params`` (full names) on top of its own
     overrides; with ``output``, the run recorded to that MCAP file. Returns the frozen
@@ -62,7 +67,7 @@ def simulate(scenario: str | os.PathLike[str] | Scenario,
 
 def analyze(source: str | os.PathLike[str] | Scenario, out: str | os.PathLike[str] | None = None,
             *, resume: bool = False, progress: Callable[[str, dict[str, Any]], None] | None = None,
-            **settings: Any) -> Any:
+            **settings: Any) -> Report:
     """The whole analysis of an accident (``rocas analyze``): replay, physical mutation, diff,
     confidence, cyber mutation, validation.
 

@@ -12,7 +12,6 @@ import importlib
 from collections.abc import Callable
 
 from rocas.errors import UsageError
-from rocas.scenarios.model import DEFAULT_STACK  # noqa: F401  (the scenario format's default)
 from rocas.stacks.base import Stack
 
 #: built-in stacks: name -> "module:factory" (imported lazily)
