@@ -27,6 +27,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="directory with the catalog recordings (default recordings/, or "
                         "recordings/NAME/ with --stack NAME)")
     add_search_arguments(p, "the searches, the validation variants and generated instances")
+    from rocas.search.executor import executor_names
+
+    p.add_argument("--executor", default="local",
+                   help=f"where simulations run: {', '.join(executor_names())} (default local; "
+                        "ray joins RAY_ADDRESS or starts a local Ray); the answers do not "
+                        "depend on it")
     p.add_argument("--compare-scope", type=int, default=3, metavar="N",
                    help="entries also analysed with --scope all (default 3)")
     p.add_argument("--instances", type=int, default=0, metavar="K",
@@ -55,6 +61,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     if own is not None:
         return _run_own_bench(own, args, env)
     cfg = AnalyzeConfig(seed=args.seed, budget=args.budget, workers=args.workers,
+                        executor=args.executor,
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
     recordings = Path(args.recordings) if args.recordings else shipped_recordings(args.stack)
@@ -82,7 +89,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
 
 
 #: options of ``rocas bench`` a stack's own bench takes (the others are rocas's pipeline's)
-_OWN_BENCH_OPTIONS = ("ids", "out", "stack", "seed", "seeds", "workers", "json")
+_OWN_BENCH_OPTIONS = ("ids", "out", "stack", "seed", "seeds", "workers", "executor", "json")
 
 
 def _run_own_bench(own: Any, args: argparse.Namespace, env: Env) -> int:
@@ -101,9 +108,10 @@ def _run_own_bench(own: Any, args: argparse.Namespace, env: Env) -> int:
     if given:
         raise UsageError(f"stack {args.stack} benches in its own world, which does not take "
                          f"--{given[0].replace('_', '-')}",
-                         "options it takes: --out, --seed, --seeds, --workers, --json")
+                         "options it takes: --out, --seed, --seeds, --workers, --executor, "
+                         "--json")
     out = Path(args.out)
-    res = own(args.ids, args.seeds or [args.seed], workers=args.workers,
+    res = own(args.ids, args.seeds or [args.seed], workers=args.workers, executor=args.executor,
               progress=lambda msg: print(msg, file=env.stderr, flush=True))
     out.mkdir(parents=True, exist_ok=True)
     (out / "bench.json").write_text(json_dumps(res, indent=1) + "\n")
@@ -171,9 +179,8 @@ def render(res: dict, env: Env) -> None:
                   f"of {a['analyses']}; references unanimous in {a['unanimous']}, another reference "
                   f"adopted in {a['adopted']}; module substitution agrees or is consistent in "
                   f"{a['second_opinion_agrees']}")
-    tb = res["time_breakdown"]
-    con.print("Time per phase: " + ", ".join(f"{k} {100 * v:.1f} %" for k, v in tb.items())
-              + f" (total {res['time_total_s']:.1f} s; the paper: 16.4 % physical, 7.3 % diff, 76.3 % cyber)")
+    for line in _phase_lines(res):
+        con.print(line)
     if res["search_space_reduction_mean"] is not None:
         con.print(f"Search space reduction: {100 * res['search_space_reduction_mean']:.1f} % "
                   "of the parameters (the paper: 85.8 %)")
@@ -184,6 +191,29 @@ def render(res: dict, env: Env) -> None:
                     else " (no fix exists to check)")
         con.print(f"{p['type']}: {p['crashed']} of {p['tried']} variants crash{repaired}; "
                   f"{p['hits']} of {p['analyzed']} analysed correctly")
+
+
+def _phase_lines(res: dict) -> list[str]:
+    """The time per phase (seconds summed over the entries and share) and, when the rows carry
+    them, the simulations per phase (``simulations``, or the built-in report's
+    ``evaluations``)."""
+    seconds: dict[str, float] = {}
+    sims: dict[str, int] = {}
+    for r in res["entries"]:
+        for k, v in (r.get("timings_s") or {}).items():
+            seconds[k] = seconds.get(k, 0.0) + v
+        for k, v in (r.get("simulations") or r.get("evaluations") or {}).items():
+            sims[k] = sims.get(k, 0) + int(v)
+    tb = res["time_breakdown"]
+    lines = ["Time per phase: " + ", ".join(
+        f"{k} {seconds[k]:.1f} s ({100 * v:.1f} %)" if k in seconds else f"{k} {100 * v:.1f} %"
+        for k, v in tb.items())
+        + f" (total {res['time_total_s']:.1f} s; the paper: 16.4 % physical, 7.3 % diff, "
+          "76.3 % cyber)"]
+    if sims:
+        lines.append("Simulations per phase: " + ", ".join(f"{k} {v}" for k, v in sims.items())
+                     + f" (total {sum(sims.values())})")
+    return lines
 
 
 def render_seeds(res: dict, env: Env) -> None:

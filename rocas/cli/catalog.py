@@ -15,7 +15,10 @@
   topping up what the ones before kept (the campaign of ``rocas triage``, docs/cli.md).
 
 ``--stack NAME`` works on another stack's catalog (``--stack lav``: L1-L6, recorded into
-``recordings/lav/``); ``--family`` is the built-in catalog's only.
+``recordings/lav/``); ``--family`` is the built-in catalog's only. A stack that drives in
+another simulator's world brings its own catalog (``--stack highway``: h01-h06, highway-env's;
+the capabilities ``catalog_entries`` and ``record_catalog``, rocas.stacks.base.CAPABILITIES):
+``list`` and ``record`` take it, ``generate`` refuses it in one line.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 from rocas._fs import check_parent_exists
 from rocas.catalog.families import FAMILIES
@@ -38,7 +42,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     stack = argparse.ArgumentParser(add_help=False)
     stack.add_argument("--stack", default=DEFAULT_STACK, metavar="NAME",
                        help="the stack whose catalog to use (default ads, the built-in ADS; "
-                            "lav: the LAV-like stack's)")
+                            "lav: the LAV-like stack's; highway: highway-env's, list and "
+                            "record only)")
     ls = sub.add_parser("list", help="show the entries and their ground truth", parents=[stack])
     ls.add_argument("--json", action="store_true", help="print the ground truth as JSON")
     rec = sub.add_parser("record", help="write the accident recording of every entry",
@@ -92,9 +97,47 @@ def _truth_json(e) -> dict:  # noqa: ANN001
             "duration_s": e.scenario.duration_s}
 
 
+def _own_catalog(stack: str) -> Any | None:
+    """The stack when it brings its own catalog (``catalog_entries`` and ``record_catalog``: a
+    stack of another simulator's world) instead of a folder of :mod:`rocas.catalog`; else None.
+
+    Raises:
+        UsageError: the stack has no catalog of either kind.
+    """
+    from rocas.stacks.registry import get_stack
+
+    s = get_stack(stack)
+    if getattr(s, "catalog", None):
+        return None
+    if callable(getattr(s, "catalog_entries", None)):
+        return s
+    raise UsageError(f"stack {stack!r} has no accident catalog",
+                     "catalogs exist for: " + ", ".join(_stacks_with_a_catalog()))
+
+
+def _stacks_with_a_catalog() -> list[str]:
+    """The registered stacks with a catalog of either kind (the built-in stack first); a stack
+    that cannot be loaded here (its optional extra is missing) is left out."""
+    from rocas.catalog import stacks_with_catalog
+    from rocas.errors import RocasError
+    from rocas.stacks.registry import get_stack, names
+
+    own = []
+    for n in names():
+        try:
+            if callable(getattr(get_stack(n), "catalog_entries", None)):
+                own.append(n)
+        except RocasError:
+            continue
+    return [*stacks_with_catalog(), *(n for n in own if n not in stacks_with_catalog())]
+
+
 def _list(args: argparse.Namespace, env: Env) -> int:
     from rich.table import Table
 
+    own = _own_catalog(args.stack)
+    if own is not None:
+        return _list_own(own, args, env)
     items = _selected([], args.stack)
     if args.json:
         print(json.dumps([_truth_json(e) for e in items], indent=2), file=env.stdout)
@@ -118,13 +161,36 @@ def _list(args: argparse.Namespace, env: Env) -> int:
     return 0
 
 
+def _list_own(stack: Any, args: argparse.Namespace, env: Env) -> int:
+    """``list`` of a stack's own catalog (its ``catalog_entries`` rows)."""
+    from rich.table import Table
+
+    rows = stack.catalog_entries()
+    if args.json:
+        print(json.dumps(rows, indent=2), file=env.stdout)
+        return 0
+    table = Table(title=f"rocas accident catalog of stack {safe(args.stack)}")
+    for col in ("id", "title", "module", "parameter(s)", "fix", "world"):
+        table.add_column(col)
+    for r in rows:
+        fix = "\n".join(f"{r['fix'][p]:g}" for p in r["parameters"]) if r["fixable"] \
+            else "none exists"
+        table.add_row(safe(r["id"]), safe(r["title"]), safe(r["module"] or "—"),
+                      safe("\n".join(r["parameters"]) or "—"), fix, safe(r["world"]))
+    env.out().print(table)
+    return 0
+
+
 def _record(args: argparse.Namespace, env: Env) -> int:
     from rocas.catalog import accident_matches
     from rocas.rollout import simulate
 
+    own = _own_catalog(args.stack)
     out_dir = Path(args.directory)
     check_parent_exists(out_dir)
     out_dir.mkdir(exist_ok=True)
+    if own is not None:
+        return _record_own(own, args.only, out_dir, env)
     failed = []
     written: list[str] = []
     for e in _selected(args.only, args.stack):
@@ -145,9 +211,42 @@ def _record(args: argparse.Namespace, env: Env) -> int:
     return 0
 
 
+def _record_own(stack: Any, only: list[str], out_dir: Path, env: Env) -> int:
+    """``record`` of a stack's own catalog (its ``record_catalog``), in its own world.
+
+    Raises:
+        UsageError: a recording does not end in the entry's documented accident.
+    """
+    failed = []
+    written: list[str] = []
+    try:
+        for r in stack.record_catalog(only or None, out_dir):
+            written.append(Path(r["path"]).name)
+            if not r["documented"]:
+                failed.append(r["id"])
+            print(f"{r['id']}: {r['outcome']} -> {r['path']}"
+                  + ("" if r["documented"] else "  [NOT the documented accident]"),
+                  file=env.stdout)
+    except KeyboardInterrupt as exc:
+        exc.kept = _kept(written, out_dir, "recording")  # type: ignore[attr-defined]
+        raise
+    if failed:
+        raise UsageError(f"entries not ending in their documented accident: {', '.join(failed)}")
+    return 0
+
+
 def _generate(args: argparse.Namespace, env: Env) -> int:
     from rocas.catalog import generate_instances, scenario_toml
 
+    own = _own_catalog(args.stack)
+    if own is not None:
+        from rocas.catalog import stacks_with_catalog
+
+        raise UsageError(f"stack {args.stack}'s catalog drives in "
+                         f"{getattr(own, 'world', 'another simulator')}'s world, where rocas "
+                         "cannot generate instances",
+                         f"list and record take --stack {args.stack}; generate works for: "
+                         + ", ".join(stacks_with_catalog()))
     if args.instances < 1:
         raise UsageError("--instances must be >= 1")
     if args.record and not (args.family and args.output):

@@ -29,10 +29,10 @@ def _run(args: argparse.Namespace) -> int:
         params = dict(e.params)
         if args.fixed and e.parameter:
             params[e.parameter] = e.fix  # type: ignore[assignment]
+        from rocas.stacks.highway.stack import accident_text
+
         run = record(e.scene, args.out, params, seed)
-        what = "collision" if run.collided else "off road" if run.off_road else "no accident"
-        when = "" if run.accident_t_s is None else f" at {run.accident_t_s:.1f} s"
-        print(f"wrote {args.out}: {what}{when}")
+        print(f"wrote {args.out}: {accident_text(run)}")
         return 0
     from rocas.search.executor import make_executor
     from rocas.stacks.highway.comutation import analyze

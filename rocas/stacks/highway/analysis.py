@@ -1,30 +1,23 @@
-"""The highway stack's own analysis entry points, which ``rocas analyze`` and ``rocas bench``
-reach through the stack's declared capabilities (``analyze_recording`` and ``bench``,
-:data:`rocas.stacks.base.CAPABILITIES`): a stack that drives in another simulator's world
-analyses its accidents in that world, with its own co-mutation
-(:func:`rocas.stacks.highway.comutation.analyze`).
+"""The highway stack's own analysis of a recording, which ``rocas analyze`` reaches through
+the stack's declared capability ``analyze_recording`` (:data:`rocas.stacks.base.CAPABILITIES`):
+a stack that drives in another simulator's world analyses its accidents in that world, with its
+own co-mutation (:func:`rocas.stacks.highway.comutation.analyze`). Its bench, scored in the
+rows the built-in bench prints, is :mod:`rocas.stacks.highway.bench`.
 
 A recording of this stack carries its scene (attachment), its parameter overrides and seed
-(``rocas.ego``): one file is enough to simulate the accident again. The bench analyses each
-catalog entry's accident (simulated at the entry's own seed, as its recording holds it) with
-the searches seeded by the bench's seed, and scores it with :func:`rocas.pipeline.bench.score`
-in the rows the built-in bench prints.
+(``rocas.ego``): one file is enough to simulate the accident again.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import statistics
-import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rocas.errors import InputError, UsageError
 from rocas.recording.topology import EGO_METADATA
-from rocas.stacks.highway.accidents import CatalogEntry, entries, entry
 from rocas.stacks.highway.comutation import Analysis, analyze, physical_space
 from rocas.stacks.highway.scene import Scene, scene_from_dict
 
@@ -133,77 +126,3 @@ def analyze_recording(path: str | os.PathLike[str], out: Path, *, seed: int = 0,
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.json").write_text(json.dumps(report.to_json(), indent=1, default=str))
     return report
-
-
-def _row(e: CatalogEntry, a: Analysis, seconds: float) -> dict[str, Any]:
-    """A scored row of the bench table (the shape :mod:`rocas.pipeline.bench` gives it)."""
-    from rocas.pipeline.bench import score
-
-    fixable = bool(e.parameter)
-    expected = {"verdict": "misconfiguration" if fixable else "no_configuration_fix",
-                "deviating_module": e.module or None,
-                "parameters": [e.parameter] if fixable else [],
-                "fixes": [{e.parameter: e.fix}] if fixable else [],
-                "trigger_entity": None, "trigger_property": None, "trigger_replayed": None}
-    report = HighwayReport(e.key, a, 0).to_json()
-    who, prop = trigger(a)
-    found = {"verdict": report["verdict"], "deviating_module": a.module,
-             "parameters": [m["parameter"] for m in report["misconfiguration"]],
-             "changes": report["misconfiguration"], "trigger_entity": who,
-             "trigger_property": prop, "robust": None}
-    if not fixable:
-        # no module is at fault: a right answer names none, or only the diff's
-        expected["deviating_module"] = found["deviating_module"] if not a.fix else None
-    marks = score(expected, found)
-    return {"id": e.key.split("_", 1)[0], "type": e.key.split("_", 1)[0], "title": e.title,
-            "expected": expected, "found": found, "marks": marks, "hit": marks["hit"],
-            "seconds": round(seconds, 2), "timings_s": dict(a.seconds),
-            "simulations": dict(a.simulations), "diff_module": a.deviating_module,
-            "confidence": None}
-
-
-def _bench_one(chosen: Sequence[CatalogEntry], seed: int, ex: Any,
-               progress: Callable[[str], None]) -> dict[str, Any]:
-    rows = []
-    for e in chosen:
-        progress(f"{e.key}: analyze (seed {seed})")
-        t0 = time.perf_counter()
-        a = analyze(e.scene, e.params, e.seed, executor=ex, search_seed=seed)
-        rows.append(_row(e, a, time.perf_counter() - t0))
-    totals: dict[str, float] = {}
-    for r in rows:
-        for k, v in r["timings_s"].items():
-            totals[k] = totals.get(k, 0.0) + v
-    whole = sum(totals.values()) or 1.0
-    return {"stack": "highway", "seed": seed, "entries": rows,
-            "hits": sum(r["hit"] for r in rows), "total": len(rows), "agreement": None,
-            "time_breakdown": {k: round(v / whole, 4) for k, v in totals.items()},
-            "time_total_s": round(whole, 2), "search_space_reduction_mean": None,
-            "scope_comparison": [], "instances": []}
-
-
-def bench(ids: Sequence[str] | None, seeds: Sequence[int], *, workers: int | None = None,
-          executor: str = "local", progress: Callable[[str], None] = lambda _: None
-          ) -> dict[str, Any]:
-    """The catalog (``ids``, default all) analysed and scored once per seed: each seed's
-    bench (``runs``), the hits per seed and per entry, as :func:`rocas.pipeline.bench.
-    run_bench_seeds` returns them.
-
-    Raises:
-        UsageError: an unknown entry, no seed, or a repeated seed.
-    """
-    if not seeds or len(set(seeds)) != len(seeds):
-        raise UsageError("the bench needs distinct seeds", "e.g. --seeds 0,1,2")
-    chosen = [entry(i) for i in ids] if ids else entries()
-    ex = _executor(workers, executor)
-    try:
-        runs = [_bench_one(chosen, s, ex, progress) for s in seeds]
-    finally:
-        ex.close()
-    from rocas.pipeline.bench import per_seed
-
-    seconds = [r["seconds"] for res in runs for r in res["entries"]]
-    return {"stack": "highway", **per_seed(seeds, runs), "agreement_per_seed": {},
-            "median_seconds": statistics.median(seconds) if seconds else None,
-            "min_seconds": min(seconds) if seconds else None}
-
