@@ -154,12 +154,22 @@ class AlphaBetaTracker:
 #:   of one of its recordings (a stack of another world analyses there), which ``rocas
 #:   analyze`` runs instead of rocas's pipeline; the report has ``to_json()`` (``--json``) and
 #:   ``lines()`` (the terminal);
-#: - ``bench(ids, seeds, *, workers, progress) -> dict``: its own catalog analysed and scored
-#:   once per seed, in the rows :func:`rocas.pipeline.bench.run_bench_seeds` returns, which
-#:   ``rocas bench --stack NAME`` prints as it prints the built-in bench.
+#: - ``bench(ids, seeds, *, workers, executor, progress) -> dict``: its own catalog analysed
+#:   and scored once per seed, its simulations on the executor named (``rocas bench
+#:   --executor``, :func:`rocas.search.executor.make_executor`), in the rows
+#:   :func:`rocas.pipeline.bench.run_bench_seeds` returns (each with ``timings_s`` and
+#:   ``simulations`` per phase), which ``rocas bench --stack NAME`` prints as it prints the
+#:   built-in bench;
+#: - ``catalog_entries() -> list[dict]`` and ``record_catalog(ids, directory) -> Iterator[dict]``:
+#:   its own accident catalog, for a stack of another world (no ``catalog`` folder):
+#:   ``rocas catalog list`` prints the rows (``id``, ``key``, ``title``, ``world``, ``module``,
+#:   ``parameters``, ``fix`` {parameter: value}, ``fixable``; ``--json`` all of them), and
+#:   ``rocas catalog record DIR [--only ID]`` writes each entry's accident recording in its
+#:   world, one row per file as it is written (``id``, ``path``, ``outcome`` text,
+#:   ``documented``: it ends in the entry's accident); ``generate`` refuses such a catalog.
 CAPABILITIES = ("read_motion", "tracker", "braking_limits", "sensing_limits", "pace_limits",
                 "substitutable", "records_rows", "catalog", "recordings", "variant_families",
-                "world", "analyze_recording", "bench")
+                "world", "analyze_recording", "bench", "catalog_entries", "record_catalog")
 
 
 @runtime_checkable

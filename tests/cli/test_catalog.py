@@ -126,3 +126,16 @@ def test_generate_per_type_tops_each_type_up_from_the_next_family(rocas, monkeyp
     assert r.code != 0 and "--per-type needs --family" in r.stderr
     r = rocas("catalog", "generate", "--family", "mixed", "--instances", "3", "--max-tries", "0")
     assert r.code != 0 and "--max-tries" in r.stderr
+
+
+def test_a_stack_without_a_catalog_names_the_stacks_that_have_one(rocas, monkeypatch):
+    from types import SimpleNamespace
+
+    from rocas.stacks import registry
+
+    monkeypatch.setitem(registry._registered, "bare", SimpleNamespace(name="bare"))
+    for action in (["list"], ["record", "out"], ["generate", "--instances", "1"]):
+        r = rocas("catalog", *action, "--stack", "bare")
+        assert r.code == 2 and r.stderr.count("\n") == 1, action
+        assert r.stderr.startswith("rocas: error: stack 'bare' has no accident catalog "
+                                   "(catalogs exist for: ads, lav"), r.stderr

@@ -80,3 +80,80 @@ def test_the_trigger_is_the_references_largest_change():
     assert a.reference is not None and a.reference_change
     who, prop = trigger(a)
     assert f"{who}.{prop}" in a.reference_change
+
+
+def test_catalog_list_shows_the_ground_truth(rocas):
+    res = rocas("catalog", "list", "--stack", "highway")
+    assert res.code == 0, res.stderr
+    lines = res.stdout.splitlines()
+    h01 = next(x for x in lines if "h01" in x)
+    assert "control.ACC_MAX" in h01 and "highway-v0" in h01
+    h06 = next(x for x in lines if "h06" in x)
+    assert "none exists" in h06
+
+
+def test_catalog_list_json_is_the_stacks_catalog(rocas):
+    from rocas.stacks.highway.accidents import entries
+
+    res = rocas("catalog", "list", "--stack", "highway", "--json")
+    assert res.code == 0, res.stderr
+    rows = json.loads(res.stdout)
+    assert [r["key"] for r in rows] == [e.key for e in entries()]
+    h01 = rows[0]
+    assert (h01["id"], h01["module"], h01["parameters"], h01["fix"], h01["fixable"]) == \
+        ("h01", "control", ["control.ACC_MAX"], {"control.ACC_MAX": 6.0}, True)
+    assert rows[-1]["fixable"] is False and rows[-1]["fix"] == {}
+
+
+def test_catalog_record_writes_the_accidents_and_they_analyse(rocas, tmp_path):
+    res = rocas("catalog", "record", tmp_path / "rec", "--stack", "highway", "--only", "h01",
+                "--only", "h06")
+    assert res.code == 0, res.stderr
+    assert res.stdout.splitlines() == [
+        f"h01: collision at 7.2 s -> {tmp_path / 'rec' / 'h01_crawling_car_weak_brakes.mcap'}",
+        f"h06: collision at 0.3 s -> {tmp_path / 'rec' / 'h06_stopped_car_too_close.mcap'}"]
+    from rocas.stacks.highway.accidents import entry
+    from rocas.stacks.highway.analysis import read_accident
+
+    scene, params, seed = read_accident(tmp_path / "rec" / "h01_crawling_car_weak_brakes.mcap")
+    e = entry("h01")
+    assert (scene, params, seed) == (e.scene, dict(e.params), e.seed)
+
+
+def test_catalog_record_of_an_unknown_entry_writes_nothing(rocas, tmp_path):
+    res = rocas("catalog", "record", tmp_path, "--stack", "highway", "--only", "h99")
+    assert res.code != 0 and res.stderr.startswith("rocas: error: no highway catalog entry")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_catalog_generate_is_refused_in_one_line(rocas):
+    res = rocas("catalog", "generate", "--stack", "highway", "--instances", "2")
+    assert res.code == 2 and res.stderr.count("\n") == 1
+    assert res.stderr.startswith("rocas: error: stack highway's catalog drives in highway-env's")
+
+
+def test_bench_takes_an_executor_and_prints_the_split_per_phase(rocas, tmp_path):
+    res = rocas("bench", "--stack", "highway", "h06", "--executor", "serial", "--out", tmp_path)
+    assert res.code == 0, res.stderr
+    text = " ".join(res.stdout.split())
+    assert "Time per phase: physical " in text and " s (" in text
+    assert "Simulations per phase: physical " in text and "cyber " in text
+    saved = json.loads((tmp_path / "bench.json").read_text())
+    assert saved["executor"] == "serial"
+    assert set(saved["runs"][0]["simulations_per_phase"]) == {"physical", "diff", "cyber",
+                                                               "validation"}
+
+
+def test_bench_of_an_unknown_executor_is_one_error_line(rocas, tmp_path):
+    res = rocas("bench", "--stack", "highway", "h06", "--executor", "nope", "--out", tmp_path)
+    assert res.code == 2 and res.stderr.startswith("rocas: error: unknown executor 'nope'")
+
+
+def test_analyze_prints_the_split_per_phase(rocas, tmp_path, capsys):
+    assert highway_main(["record", "h06", str(tmp_path / "h06.mcap")]) == 0
+    capsys.readouterr()
+    res = rocas("analyze", tmp_path / "h06.mcap", "--executor", "serial", "--out",
+                tmp_path / "run")
+    assert res.code == 0, res.stderr
+    text = " ".join(res.stdout.split())
+    assert "time physical " in text and "validation " in text and "simulations " in text
