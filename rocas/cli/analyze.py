@@ -279,7 +279,8 @@ def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: En
         env.stdout.write(json_dumps(report.to_json(), indent=2) + "\n")
     else:
         for line in report.lines():
-            env.out().print(safe(line))
+            for part in line.split("\n"):  # a report's line may hold several (a summary)
+                env.out().print(safe(part))
         env.out().print(f"Run directory: {safe(str(out))}")
     return ExitStatus.SUCCESS
 

@@ -3,6 +3,9 @@
     python -m rocas.stacks.highway list
     python -m rocas.stacks.highway record h01 out.mcap [--fixed] [--seed N]
     python -m rocas.stacks.highway analyze h01 [--seed N] [--workers 2] [--executor local|ray]
+
+``rocas catalog list|record --stack highway`` and ``rocas bench --stack highway`` reach the same
+catalog and analyses through the stack's declared capabilities (:mod:`.stack`).
 """
 
 from __future__ import annotations

@@ -155,5 +155,7 @@ def test_analyze_prints_the_split_per_phase(rocas, tmp_path, capsys):
     res = rocas("analyze", tmp_path / "h06.mcap", "--executor", "serial", "--out",
                 tmp_path / "run")
     assert res.code == 0, res.stderr
-    text = " ".join(res.stdout.split())
-    assert "time physical " in text and "validation " in text and "simulations " in text
+    lines = res.stdout.splitlines()
+    split = next(x for x in lines if x.lstrip().startswith("time physical "))
+    assert "validation " in split and "simulations " in " ".join(lines)
+    assert "\\n" not in res.stdout  # the summary's lines are lines, not an escaped newline
