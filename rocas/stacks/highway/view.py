@@ -11,7 +11,7 @@ Entity layout (timeline ``sim_time`` [s], as in :mod:`rocas.viz`)::
     world/<run>/ego/box, ego/body             the ego per tick; ego/path its whole path (static)
     world/<run>/vehicles/boxes, bodies        every other vehicle per tick ("v<id> <kind>")
     world/<run>/vehicles/changed              the vehicles the reference changes, outlined
-    world/<run>/crash                         where and when the accident happens
+    world/<run>/crash, crash/label            where and when the accident happens
     world/<run>/events                        the run's outcome as a text log line
     signals/<run>/speed, acceleration,        the ego's speed [m/s], acceleration command
     signals/<run>/steering                    [m/s^2] and steering command [rad]
@@ -69,6 +69,9 @@ UNBOUNDED_LANE_M = 2000.0
 ROAD_MARGIN_M = 150.0
 #: highway-env's own stripe pattern (``LaneGraphics.STRIPE_SPACING``, ``STRIPE_LENGTH``) [m]
 STRIPE_SPACING_M, STRIPE_LENGTH_M = 4.33, 3.0
+#: the crash's text sits this far from the ego's position, above it as the view shows it
+#: (highway-env's y axis points down, as Rerun's 2D views draw it) [m]
+CRASH_LABEL_OFFSET_M = 6.5
 #: the scene views open on this much around the accident (half width, half height) [m]
 FRAME_HALF_M = (45.0, 22.0)
 REPORT = "report"
@@ -248,11 +251,15 @@ def _log_run(rec: Any, run: _Run) -> None:
         x, y = r.ego[-1, :2]
         a = np.linspace(0.0, 2 * np.pi, 41)
         ring = np.stack([x + 4.0 * np.cos(a), y + 4.0 * np.sin(a)], axis=1)
-        over_time(rec, f"{prefix}/crash", rr.LineStrips2D.from_fields(draw_order=12.0), [t],
-                  rr.LineStrips2D.columns(strips=[ring], radii=[0.35], colors=[ACCIDENT_COLOR],
-                                          labels=[f"{run.name}: {what} at {t:.2f} s"],
-                                          show_labels=[True]))
-        text, level = f"{run.name}: ACCIDENT: {what} at {t:.2f} s", "CRITICAL"
+        label = f"{run.name}: {what} at {t:.2f} s"
+        over_time(rec, f"{prefix}/crash", rr.LineStrips2D.from_fields(
+            radii=0.35, colors=[ACCIDENT_COLOR], show_labels=False, draw_order=12.0), [t],
+            rr.LineStrips2D.columns(strips=[ring], labels=[label]))
+        # its text above the ring, clear of the ego's own label
+        over_time(rec, f"{prefix}/crash/label", rr.Points2D.from_fields(
+            radii=0.05, colors=[ACCIDENT_COLOR], show_labels=True, draw_order=13.0), [t],
+            rr.Points2D.columns(positions=[(x, y - CRASH_LABEL_OFFSET_M)], labels=[label]))
+        text, level = f"{run.name}: {what} at {t:.2f} s", "CRITICAL"
     else:
         t = float(r.times[-1])
         text = (f"{run.name}: no accident in {r.scene.duration_s:g} s (smallest clearance "
@@ -278,14 +285,14 @@ def _log_vehicles(rec: Any, run: _Run, prefix: str) -> None:
     fill = [KIND_COLORS.get(kd, id_color(kd)[:3]) for kd in kinds]
     labels = [f"v{i} {kd}" for i, kd in enumerate(kinds, start=1)]
     over_time(rec, f"{prefix}/vehicles/boxes", rr.LineStrips2D.from_fields(
-        radii=0.1, show_labels=False, draw_order=9.1), r.times,
+        radii=0.1, draw_order=9.1), r.times,
         rr.LineStrips2D.columns(strips=list(box_outline(xy, heading, size)),
-                                colors=[contrast(c) for c in fill] * k,
-                                labels=labels * k).partition([a] * k))
-    over_time(rec, f"{prefix}/vehicles/bodies", rr.LineStrips2D.from_fields(draw_order=9.0),
-              r.times, rr.LineStrips2D.columns(
-                  strips=list(body_line(xy, heading, size)), colors=fill * k,
-                  radii=np.maximum(size[:, 1] / 2 - 0.08, 0.1)).partition([a] * k))
+                                colors=[contrast(c) for c in fill] * k).partition([a] * k))
+    # the labels on the bodies: in the body's colour, which reads on the label's dark ground
+    over_time(rec, f"{prefix}/vehicles/bodies", rr.LineStrips2D.from_fields(
+        show_labels=True, draw_order=9.0), r.times, rr.LineStrips2D.columns(
+            strips=list(body_line(xy, heading, size)), colors=fill * k, labels=labels * k,
+            radii=np.maximum(size[:, 1] / 2 - 0.08, 0.1)).partition([a] * k))
     ids = sorted(i for i in run.changed if 1 <= i <= a)
     if ids:
         cols = np.array(ids) - 1
@@ -425,7 +432,7 @@ def blueprint(runs: Sequence[str], frame: tuple[tuple[float, float], tuple[float
 
     scenes = [scene(f"Scene: {r}", [f"+ world/{r}/**"]) for r in runs]
     scenes.append(scene("Ego paths", [c for r in runs for c in (f"+ world/{r}/ego/path",
-                                                                  f"+ world/{r}/crash")]))
+                                                                  f"+ world/{r}/crash/**")]))
     plots = [rrb.TimeSeriesView(origin="signals", contents=[f"+ signals/{r}/{s}" for r in runs],
                                 name=title)
              for s, title in (("speed", "Ego speed [m/s]"),
