@@ -20,8 +20,9 @@ Entity layout (timeline ``sim_time`` [s], as in :mod:`rocas.viz`)::
 ``<run>`` is ``accident``, ``reference`` or ``fix`` (those the analysis has). No name from the
 data (the scene's name, a vehicle's kind, a recording's path) is part of an entity path: they
 appear in labels and in the documents only, escaped for Markdown
-(:func:`rocas._text.markdown_text`). Rows go in with ``send_columns`` (one call per entity),
-the layout as the file's active blueprint (:func:`rocas.viz.stream.rrd_recording`).
+(:func:`rocas._text.markdown_text`) and never inside a code span (where no escape holds).
+Rows go in with ``send_columns`` (one call per entity), the layout as the file's active
+blueprint (:func:`rocas.viz.stream.rrd_recording`).
 """
 
 from __future__ import annotations
@@ -340,7 +341,7 @@ def _outcome_text(r: RunResult | None) -> str:
 def verdict_markdown(a: Analysis, source: str | None = None) -> str:
     """The answer in a few lines: verdict, module, fix, validation, time and simulations."""
     verdict = "misconfiguration" if a.fix else "no_configuration_fix"
-    fix = ", ".join(f"`{markdown_text(k)}` = {v:.4g}" for k, v in sorted(a.fix.items()))
+    fix = ", ".join(f"{markdown_text(k)} = {v:.4g}" for k, v in sorted(a.fix.items()))
     rows = [f"# {markdown_text(a.accident.scene.name)}: {verdict}", ""]
     if source is not None:
         rows += [f"Recording: {markdown_text(source)}", ""]
@@ -363,7 +364,7 @@ def diff_markdown(a: Analysis) -> str:
     if a.reference is None:
         rows += ["**No reference**: the physical search found no nearby scene without the "
                  "accident, so there was nothing to diff; the cyber search covered "
-                 f"`{markdown_text(a.searched_module or 'driver')}`."]
+                 f"{markdown_text(a.searched_module or 'driver')}."]
         return "\n".join(rows) + "\n"
     who, prop = trigger(a)
     space = physical_space(a.accident.scene)
@@ -375,10 +376,10 @@ def diff_markdown(a: Analysis) -> str:
                     f"{_value(space.variable(name).original)} | "
                     f"{_value(a.reference_change[name])} |")
     module = a.deviating_module
-    rows += ["", f"**Initial deviating module: `{markdown_text(module)}`**" if module else
+    rows += ["", f"**Initial deviating module: {markdown_text(module)}**" if module else
              "**The diff named no deviating module.**"]
     if a.module != module:
-        rows += ["", f"The answer's module is the fix's, `{markdown_text(a.module)}`: the "
+        rows += ["", f"The answer's module is the fix's, **{markdown_text(a.module)}**: the "
                  "diff's module has no parameters, or none of them held a fix."]
     return "\n".join(rows) + "\n"
 
@@ -388,9 +389,9 @@ def fix_markdown(a: Analysis) -> str:
     searched = markdown_text(a.searched_module or "driver")
     if not a.fix:
         return ("# No configuration fix\n\nNo change of the parameters searched "
-                f"(`{searched}`) avoids the accident.\n")
+                f"({searched}) avoids the accident.\n")
     before = dict(a.accident.params)
-    rows = [f"# Fix (cyber search over `{searched}`)", "",
+    rows = [f"# Fix (cyber search over {searched})", "",
             "| parameter | accident | fix |", "|---|---|---|"]
     rows += [f"| {markdown_text(k)} | {before.get(k, float('nan')):.4g} | {v:.4g} |"
              for k, v in sorted(a.fix.items())]

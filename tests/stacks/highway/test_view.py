@@ -100,9 +100,9 @@ def test_the_crash_and_the_answer_read_as_text(analysis, tmp_path):
     assert "| control.ACC_MAX | 1.82 | 3.33 |" in fix and "3 of 4" in fix
     assert "planning.LANE_CHANGE_MIN_ACC_GAIN = 1.94" in fix
     diff = _text(out, "/report/diff")
-    assert "Initial deviating module: `perception`" in diff
+    assert "**Initial deviating module: perception**" in diff
     assert "| v1.speed (trigger) | 2.484 | 1.75 |" in diff
-    assert "`control`" in diff  # the answer's module, revised to the fix's
+    assert "the fix's, **control**" in diff  # the answer's module, revised to the fix's
     verdict = _text(out, "/report/verdict")
     assert verdict.startswith("# planted: misconfiguration") and "planted.mcap" in verdict
 
