@@ -250,7 +250,7 @@ def _own_analysis(path: Path) -> Callable[..., Any] | None:
 
 
 #: options of ``rocas analyze`` a stack's own analysis takes (the others are rocas's pipeline's)
-_OWN_ANALYSIS_OPTIONS = ("source", "out", "seed", "workers", "executor", "json", "quiet")
+_OWN_ANALYSIS_OPTIONS = ("source", "out", "seed", "workers", "executor", "json", "quiet", "rrd")
 
 
 def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: Env) -> int:
@@ -269,12 +269,16 @@ def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: En
         raise UsageError(f"this recording's stack analyses in its own world, which does not take "
                          f"--{given[0].replace('_', '-')}",
                          "options it takes: --out, --seed, --workers, --executor, --json, "
-                         "--quiet")
+                         "--quiet, --rrd")
     out = Path(args.out) if args.out else Path("runs") / safe_component(Path(args.source).stem)
     if args.out:
         check_parent_exists(out)
+    if args.rrd:
+        check_writable(args.rrd)  # before minutes of work, not after
     report = own(Path(args.source), out, seed=args.seed, workers=args.workers,
                  executor=args.executor)
+    if args.rrd:
+        _copy_own_rrd(report, args.rrd)
     if args.json:
         env.stdout.write(json_dumps(report.to_json(), indent=2) + "\n")
     else:
@@ -282,7 +286,29 @@ def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: En
             for part in line.split("\n"):  # a report's line may hold several (a summary)
                 env.out().print(safe(part))
         env.out().print(f"Run directory: {safe(str(out))}")
+        if args.rrd:
+            env.out().print(f"Rerun recording: {safe(args.rrd)}")
     return ExitStatus.SUCCESS
+
+
+def _copy_own_rrd(report: Any, path: str) -> None:
+    """``--rrd`` of a stack's own analysis: a copy of the view it wrote into its run directory
+    (its report's ``rrd``; the highway stack's is ``RUN_DIR/analysis.rrd``).
+
+    Raises:
+        UsageError: the stack's analysis wrote no view.
+    """
+    import shutil
+
+    from rocas._fs import atomic_path
+    from rocas.errors import UsageError
+
+    written = getattr(report, "rrd", None)
+    if written is None or not Path(written).is_file():
+        raise UsageError("this recording's stack wrote no Rerun view of its analysis",
+                         "run it again without --rrd")
+    with atomic_path(path) as tmp:
+        shutil.copyfile(written, tmp)
 
 
 def kept_after_interrupt(out: Path, rrd: str | None) -> str:

@@ -94,6 +94,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
     keep = Path(args.rrd) if args.rrd else None
     if keep is not None:
         check_writable(keep)
+    source = own_view(source)
     if is_rrd_file(source):
         return _view_rrd(source, keep, args, env)
     native = not args.no_viewer and not args.web and has_display()
@@ -133,6 +134,20 @@ def run(args: argparse.Namespace, env: Env) -> int:
     finally:
         if tmpdir is not None:
             tmpdir.cleanup()
+
+
+#: the view a stack that analyses in its own world writes into its run directory (the
+#: highway stack's ``analyze_recording``): that run directory holds no recordings to draw from
+OWN_VIEW = "analysis.rrd"
+
+
+def own_view(source: Path) -> Path:
+    """``RUN_DIR/analysis.rrd`` when ``source`` is the run directory of a stack's own analysis
+    (it holds that view and no ``accident.mcap``), else ``source`` itself."""
+    if (source.is_dir() and not (source / "accident.mcap").exists()
+            and (source / OWN_VIEW).is_file()):
+        return source / OWN_VIEW
+    return source
 
 
 #: the first bytes of every Rerun recording file (an .rrd or a blueprint .rbl)

@@ -69,12 +69,14 @@ class HighwayReport:
 
     Attributes:
         source: the recording analysed; analysis: what the co-mutation found; seed: the
-        searches' seed.
+        searches' seed; rrd: its Rerun view (``RUN_DIR/analysis.rrd``, which ``rocas analyze
+        --rrd`` copies and ``rocas view RUN_DIR`` opens), None when none was written.
     """
 
     source: str
     analysis: Analysis
     seed: int
+    rrd: Path | None = None
 
     @property
     def verdict(self) -> str:
@@ -97,7 +99,9 @@ class HighwayReport:
                 "simulations": dict(a.simulations)}
 
     def lines(self) -> list[str]:
-        return [f"{self.source}: {self.verdict}", "  " + self.analysis.summary()]
+        # one printed line per line of the summary (a newline in a line prints as "\n")
+        return [f"{self.source}: {self.verdict}",
+                *("  " + ln.strip() for ln in self.analysis.summary().splitlines())]
 
 
 def _executor(workers: int | None, executor: str) -> Any:
@@ -111,18 +115,24 @@ def _executor(workers: int | None, executor: str) -> Any:
 def analyze_recording(path: str | os.PathLike[str], out: Path, *, seed: int = 0,
                       workers: int | None = None, executor: str = "local") -> HighwayReport:
     """The co-mutation on a recorded accident, its searches seeded by ``seed``; writes
-    ``out/report.json``.
+    ``out/report.json`` and its Rerun view ``out/analysis.rrd``
+    (:func:`rocas.stacks.highway.view.write_analysis_rrd`: the run directory holds no
+    recordings to draw it from later, and it takes a fraction of a second).
 
     Raises:
-        InputError: not a highway recording; NotReproducedError: it has no accident.
+        InputError: not a highway recording; NotReproducedError: it has no accident;
+        OutputError: the view cannot be written.
     """
+    from rocas.stacks.highway.view import write_analysis_rrd
+
     scene, params, sim_seed = read_accident(path)
     ex = _executor(workers, executor)
     try:
         a = analyze(scene, params, sim_seed, executor=ex, search_seed=seed)
     finally:
         ex.close()
-    report = HighwayReport(str(path), a, seed)
     out.mkdir(parents=True, exist_ok=True)
+    write_analysis_rrd(out / "analysis.rrd", a, str(path))
+    report = HighwayReport(str(path), a, seed, out / "analysis.rrd")
     (out / "report.json").write_text(json.dumps(report.to_json(), indent=1, default=str))
     return report

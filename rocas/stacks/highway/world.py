@@ -69,6 +69,8 @@ class RunResult:
             (inf when it never closed in).
         min_margin_m: smallest clearance between the ego's box and another vehicle's or a road
             object's, in the ego's frame (:func:`_margin`) [m].
+        steering: (K,) the ego's steering command [rad] at each tick (for the view; not in
+            :meth:`digest`, which the trajectories it steers already determine).
     """
 
     scene: Scene
@@ -84,6 +86,7 @@ class RunResult:
     off_road_t_s: float | None
     min_ttc_s: float
     min_margin_m: float
+    steering: np.ndarray
 
     @property
     def accident(self) -> bool:
@@ -177,7 +180,7 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
     sim = build(scene, p, seed)
     road, ego, dt = sim.road, sim.ego, sim.dt_s
     a = len(sim.others)
-    times, ego_rows, other_rows = [], [], []
+    times, ego_rows, other_rows, steering = [], [], [], []
     collided, off_road = False, False
     t_collision = t_off = None
     hit = -1
@@ -191,6 +194,7 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
         times.append(t)
         ego_rows.append((ego.position[0], ego.position[1], ego.heading, ego.speed,
                          frame.acceleration_mps2))
+        steering.append(frame.steering_rad)
         other_rows.append([(v.position[0], v.position[1], v.heading, v.speed)
                            for v in sim.others])
         min_ttc = min(min_ttc, _ttc(ego, frame, sim.others))
@@ -205,7 +209,8 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
     return RunResult(scene, int(seed), p, np.array(times),
                      np.array(ego_rows, dtype=np.float64).reshape(-1, 5),
                      np.array(other_rows, dtype=np.float64).reshape(len(times), a, 4),
-                     collided, t_collision, hit, off_road, t_off, float(min_ttc), float(min_margin))
+                     collided, t_collision, hit, off_road, t_off, float(min_ttc), float(min_margin),
+                     np.array(steering, dtype=np.float64))
 
 
 def _ttc(ego: Any, frame: DecisionFrame, others: list[Any]) -> float:
