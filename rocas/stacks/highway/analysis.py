@@ -94,6 +94,8 @@ class HighwayReport:
         return {"stack": "highway", "source": self.source, "seed": self.seed,
                 "verdict": self.verdict, "deviating_module": a.module,
                 "diff_module": a.deviating_module, "searched_module": a.searched_module,
+                "confidence": {"level": a.confidence, "agreement": a.agreement,
+                               "reference_modules": list(a.reference_modules)},
                 "triggering_entity": {"entity": who, "property": prop} if who else None,
                 "reference_change": dict(a.reference_change),
                 "misconfiguration": [{"parameter": k, "original": original[k], "mutated": v}
@@ -159,7 +161,7 @@ def _row(e: CatalogEntry, a: Analysis, seconds: float) -> dict[str, Any]:
             "expected": expected, "found": found, "marks": marks, "hit": marks["hit"],
             "seconds": round(seconds, 2), "timings_s": dict(a.seconds),
             "simulations": dict(a.simulations), "diff_module": a.deviating_module,
-            "confidence": None}
+            "confidence": a.confidence}
 
 
 def _bench_one(chosen: Sequence[CatalogEntry], seed: int, ex: Any,
