@@ -373,20 +373,19 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     smalls, _ = shrink_sets(candidates, holds)
     smalls, _ = shrink_all_magnitudes(smalls, space, holds)
     runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
-    # the counterfactual closest to the accident wins: among repairing fixes with the fewest
-    # parameters, the one whose drive departs least from the accident's (the paper's second
-    # objective), then the smallest change. A change that is small in its parameter's range
-    # may still remake the drive (a stiffer lateral gain damping a heading oscillation the
-    # accident's heading gain caused); the shrunk fixes all lie at their repair's edge, so
-    # their sizes say less than what they do to the drive
-    # ... and a parameter that repairs when moved either way ranks after the rest: the
-    # accident hangs on its exact value (MOBIL's decision phase at the ramp's end), not on it
-    # being too high or too low, so no direction of it is the cause
-    # ... and, between those, a fix that undoes a departure from the declared defaults ranks
-    # before one that retunes a parameter the configuration left at its default: both avoid
-    # the accident, but only the first names something the configuration changed (a stiffer
-    # lateral gain also damps the oscillation an over-tuned heading gain causes; the heading
-    # gain is what was changed)
+    # the ranking of the repairing fixes, fewest parameters first:
+    # 1. one that undoes a departure from the declared defaults, before one that retunes a
+    #    parameter the configuration left at its default: both avoid the accident, but only
+    #    the first names something the configuration changed (a stiffer lateral gain also
+    #    damps the oscillation an over-tuned heading gain causes; the heading gain is what
+    #    was changed), whatever else of the parameter's range happens to repair too;
+    # 2. a parameter that repairs when moved either way after the rest: the accident hangs on
+    #    its exact value (MOBIL's decision phase at the ramp's end), not on it being too high
+    #    or too low, so no direction of it is the cause;
+    # 3. the counterfactual closest to the accident: the drive that departs least from the
+    #    accident's (the paper's second objective), then the smallest change. A change that is
+    #    small in its parameter's range may still remake the drive; the shrunk fixes all lie at
+    #    their repair's edge, so their sizes say less than what they do to the drive
     fixed = [m for m in dict.fromkeys(smalls) if repairs(runs[id(m)])]
     ways = {(n, float(v) > current.get(n, 0.0)) for m in fixed for n, v in m.values.items()}
 
@@ -394,7 +393,7 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
         return any((n, float(v) <= current.get(n, 0.0)) in ways for n, v in m.values.items())
 
     ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
-        not repairs(runs[id(m)]), len(m.values), two_way(m), not restores(m, current),
+        not repairs(runs[id(m)]), len(m.values), not restores(m, current), two_way(m),
         ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until),
         space.distance(m), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
