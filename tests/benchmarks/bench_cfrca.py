@@ -33,15 +33,33 @@ from rocas.stacks.highway.world import simulate  # noqa: E402
 CF_RCA = "CF-RCA (IEEE RA-L 2026): 98.3 % of 12,926 MetaDrive scenarios"
 
 
-def injected_accidents(seed: int):
-    """Yield (scene, parameter, harmful value) for runs that crash and that restoring the
-    parameter repairs, forever (scene k is drawn from the generator seeded with (seed, k))."""
+def departures(rng: np.random.Generator, share: float, injected: str) -> dict[str, float]:
+    """A tuned configuration: each parameter but the injected one leaves its default with
+    probability ``share``, by a factor between 0.75 and 1.33 (POLITENESS, whose default is 0:
+    to between 0 and 0.5), within its range."""
+    out = {}
+    for p in parameters():
+        if p.full_name == injected or rng.uniform() >= share:
+            continue
+        value = (float(rng.uniform(0.0, 0.5)) if p.default == 0
+                 else p.default * float(np.exp(rng.uniform(np.log(0.75), np.log(4 / 3)))))
+        out[p.full_name] = float(np.clip(value, p.low, p.high))
+    return out
+
+
+def injected_accidents(seed: int, share: float = 0.0):
+    """Yield (scene, tuned configuration, parameter, harmful value) for runs that crash and
+    that restoring the parameter to its default repairs, forever (scene k is drawn from the
+    generator seeded with (seed, k), its configuration's departures, with probability
+    ``share`` per parameter, from (seed, k, 1))."""
     k = 0
     while True:
         scene, name, value = draw(np.random.default_rng([seed, k]), f"bench-{seed}-{k}")
+        tuned = departures(np.random.default_rng([seed, k, 1]), share, name) if share else {}
         k += 1
-        if simulate(scene, {name: value}, 0).accident and not simulate(scene, {}, 0).accident:
-            yield scene, name, value
+        if (simulate(scene, {**tuned, name: value}, 0).accident
+                and not simulate(scene, tuned, 0).accident):
+            yield scene, tuned, name, value
 
 
 def restores(fix: Mapping[str, float], name: str, injected: float, default: float) -> bool:
@@ -57,24 +75,28 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--executor", default="local")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--departures", type=float, default=0.0, metavar="SHARE",
+                    help="tune the configuration first: each other parameter leaves its "
+                         "default with this probability (0: every other parameter at its "
+                         "default, as CF-RCA's injections)")
     args = ap.parse_args(argv)
     defaults = {p.full_name: p.default for p in parameters()}
     executor = make_executor(args.executor, args.workers)
     start = time.perf_counter()
     rows = []
     try:
-        for scene, name, value in injected_accidents(args.seed):
+        for scene, tuned, name, value in injected_accidents(args.seed, args.departures):
             if len(rows) >= args.accidents or time.perf_counter() - start > args.minutes * 60:
                 break
             t0 = time.perf_counter()
-            a = analyze(scene, {name: value}, 0, executor=executor)
+            a = analyze(scene, {**tuned, name: value}, 0, executor=executor)
             took = time.perf_counter() - t0
             hit = restores(a.fix, name, value, defaults[name])
             among = hit or any(restores(f, name, value, defaults[name]) for f in a.alternatives)
             module = name.split(".")[0]
             rows.append((name, hit, a.deviating_module == module, took, among,
                          a.module == module))
-            print(f"{scene.name:14} {name:42} {value:7.3g} -> module {a.module} (diff "
+            print(f"{scene.name:14} {name:42} {value:7.3g} ({len(tuned)} tuned) -> module {a.module} (diff "
                   f"{a.deviating_module}) "
                   f"fix {dict(a.fix)} {'HIT' if hit else 'among others' if among else 'MISS'} {took:.1f} s "
                   f"({sum(a.simulations.values())} sims)", flush=True)

@@ -89,6 +89,8 @@ class HighwayReport:
         return {"stack": "highway", "source": self.source, "seed": self.seed,
                 "verdict": self.verdict, "deviating_module": a.module,
                 "diff_module": a.deviating_module, "searched_module": a.searched_module,
+                "confidence": {"level": a.confidence, "agreement": a.agreement,
+                               "reference_modules": list(a.reference_modules)},
                 "triggering_entity": {"entity": who, "property": prop} if who else None,
                 "reference_change": dict(a.reference_change),
                 "misconfiguration": [{"parameter": k, "original": original[k], "mutated": v}

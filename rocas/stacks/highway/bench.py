@@ -48,7 +48,7 @@ def row(e: CatalogEntry, a: Analysis, seconds: float) -> dict[str, Any]:
             "expected": expected, "found": found, "marks": marks, "hit": marks["hit"],
             "seconds": round(seconds, 2), "timings_s": dict(a.seconds),
             "simulations": dict(a.simulations), "diff_module": a.deviating_module,
-            "confidence": None}
+            "confidence": a.confidence}
 
 
 def _sums(rows: Sequence[Mapping[str, Any]], key: str) -> dict[str, float]:

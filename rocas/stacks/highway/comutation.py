@@ -6,11 +6,14 @@
 2. **Diff**: the accident and the reference are recorded and compared with
    :func:`rocas.analysis.diff`; the walk from the control channel names the initial deviating
    module.
-3. **Cyber**: a search over that module's parameters (bounded by their ParamSpec ranges) on the
-   accident scene, screened one parameter at a time first; the best few fixes are shrunk
+3. **Cyber**: first the counterfactual of each departure from the driver's declared defaults
+   (that parameter alone back at its default: one run each, whatever module it belongs to),
+   then a search over the named module's parameters (bounded by their ParamSpec ranges) on
+   the accident scene, screened one parameter at a time first; the best few fixes are shrunk
    (fewest parameters, then smallest changes) and, among those with the fewest parameters,
-   the one whose drive departs least from the accident's wins (then the smallest change); a
-   parameter that repairs when moved either way ranks last.
+   one that undoes a departure ranks first, then the one whose drive departs least from the
+   accident's (then the smallest change); a parameter that repairs when moved either way
+   ranks last.
 4. **Validation**: every shrunk fix on seeded variants of the accident scene that still
    crash; the fix that avoids the accident on the most of them is the answer.
 
@@ -19,6 +22,7 @@ Budgets are counted in simulations; simulations run on ``rocas.search.executor``
 
 from __future__ import annotations
 
+import math
 import tempfile
 import time
 from collections.abc import Mapping, Sequence
@@ -39,6 +43,8 @@ from rocas.stacks.highway.world import RunResult, simulate
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
 #: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
 SHRINK_CANDIDATES = 6
+#: other references the confidence diffs the accident against (beside the chosen one)
+ALTERNATE_REFERENCES = 2
 #: a fix must keep the ego this far from everything [m]: one that shaves the accident into a
 #: near miss has repaired nothing (and shrinking would stop at the first miss by millimetres)
 FIX_MARGIN_M = 0.5
@@ -73,6 +79,8 @@ class Analysis:
         fix: parameter full name -> value (empty when no fix was found).
         alternatives: the other shrunk fixes, smallest change first.
         fix_run: the accident scene with the fix (None without a fix).
+        reference_modules: the diff's module against the chosen reference, then against each
+            other reference of the confidence (empty without a reference).
         validated: variants the fix avoids, of ``variants`` that crash unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
         simulations: simulations per phase (physical, with the accident's own run; diff, the
@@ -87,6 +95,7 @@ class Analysis:
     fix: Mapping[str, float]
     alternatives: tuple[Mapping[str, float], ...]
     fix_run: RunResult | None
+    reference_modules: tuple[str | None, ...]
     validated: int
     variants: int
     seconds: Mapping[str, float]
@@ -103,13 +112,34 @@ class Analysis:
             return owners.pop()
         return self.deviating_module
 
+    @property
+    def agreement(self) -> Mapping[str, object] | None:
+        """How many references' diffs name the chosen reference's module
+        (:func:`rocas.pipeline.confidence.agreement`; None without a reference)."""
+        from rocas.pipeline.confidence import agreement
+
+        return agreement(list(self.reference_modules)) if self.reference_modules else None
+
+    @property
+    def confidence(self) -> str | None:
+        """stable / contested / unstable, as the built-in pipeline's confidence in the diff's
+        module over several references (:func:`rocas.pipeline.confidence.level`; no module
+        substitution for this stack)."""
+        from rocas.pipeline.confidence import level
+
+        agree = self.agreement
+        return None if agree is None else level(dict(agree), None)
+
     def summary(self) -> str:
         s, n = self.seconds, self.simulations
         fix = ", ".join(f"{k}={v:.3g}" for k, v in sorted(self.fix.items())) or "none"
         others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
                            for a in self.alternatives) or "none"
+        agree = self.agreement
+        refs = (f", {agree['same']}/{agree['runs']} references agree: {self.confidence}"
+                if agree else "")
         return (f"{self.accident.scene.name}: module {self.module} (diff "
-                f"{self.deviating_module}, searched {self.searched_module}); fix {fix} "
+                f"{self.deviating_module}{refs}, searched {self.searched_module}); fix {fix} "
                 f"(other fixes: {others}); validated "
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
@@ -185,7 +215,10 @@ def _until(accident: RunResult) -> int:
 
 
 def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner: _Runner,
-              budget: Budget, seed: int) -> tuple[RunResult | None, Mutation]:
+              budget: Budget, seed: int
+              ) -> tuple[RunResult | None, Mutation, tuple[Scene, ...]]:
+    """The reference (None without one), its change, and up to ALTERNATE_REFERENCES other
+    references' scenes for the confidence."""
     scene = accident.scene
     space = physical_space(scene)
     until = _until(accident)
@@ -200,10 +233,36 @@ def _physical(accident: RunResult, params: tuple[tuple[str, float], ...], runner
                        single_property_share=0.5, stop_when_feasible_after=1)
     result = run_search(space, evaluate, cfg, 2)
     if not result.feasible:
-        return None, Mutation()
-    best = min(result.feasible, key=lambda c: (c.objectives[0], c.objectives[1]))
+        return None, Mutation(), ()
+    ranked = sorted(result.feasible, key=lambda c: (c.objectives[0], c.objectives[1]))
+    best = ranked[0]
+    # the confidence's other references: the best candidates that change another set of
+    # properties than the chosen one and than each other (independent views of the accident)
+    seen, others = {best.mutation.names}, []
+    for c in ranked[1:]:
+        if c.mutation.names not in seen and len(others) < ALTERNATE_REFERENCES:
+            seen.add(c.mutation.names)
+            others.append(apply_physical(scene, c.mutation))
     ref_scene = apply_physical(scene, best.mutation)
-    return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation
+    return runner.runs([(ref_scene, params, accident.seed)])[0], best.mutation, tuple(others)
+
+
+def _diff_references(scene: Scene, references: Sequence[Scene], params: Mapping[str, float],
+                     seed: int) -> tuple[str | None, ...]:
+    """The diff's deviating module of the accident against each reference scene (recorded
+    into a temporary folder, removed after)."""
+    from rocas.analysis.diff import diff
+    from rocas.stacks.highway.record import record
+
+    with tempfile.TemporaryDirectory(prefix="rocas-highway-") as tmp:
+        a = Path(tmp, "accident.mcap")
+        record(scene, a, dict(params), seed)
+        modules = []
+        for i, ref in enumerate(references):
+            b = Path(tmp, f"reference_{i}.mcap")
+            record(ref, b, dict(params), seed)
+            modules.append(diff(a, b).deviating_module)
+    return tuple(modules)
 
 
 def quarter_points(space: MutationSpace) -> list[Mutation]:
@@ -220,17 +279,47 @@ def quarter_points(space: MutationSpace) -> list[Mutation]:
     return list(dict.fromkeys(out))
 
 
+def defaults() -> dict[str, float]:
+    """The driver's declared parameter values (highway-env's own class constants)."""
+    return {p.full_name: p.default for p in parameters()}
+
+
+def restores(m: Mutation, current: Mapping[str, float]) -> bool:
+    """Every parameter ``m`` changes departs from its declared default and moves back towards
+    it (not past it): the fix undoes a departure rather than retuning a default."""
+    home = defaults()
+    for n, v in m.values.items():
+        d, c = home[n], current.get(n, home[n])
+        if math.isclose(c, d, rel_tol=1e-9, abs_tol=1e-12) or not min(c, d) <= float(v) <= max(c, d):
+            return False
+    return True
+
+
+def restorations(space: MutationSpace, current: Mapping[str, float]) -> list[Mutation]:
+    """Each departure from the declared defaults undone alone: the counterfactual "had this
+    parameter kept its default", for every departed parameter whose default the space admits
+    (a braking floor forbids restoring a stronger brake downwards)."""
+    home = defaults()
+    out = []
+    for var in space.variables:
+        d, c = home[var.name], float(current.get(var.name, home[var.name]))
+        if not math.isclose(c, d, rel_tol=1e-9, abs_tol=1e-12) and var.low <= d <= var.high:
+            out.append(Mutation({var.name: d}))
+    return out
+
+
 def _shrink_candidates(found: Sequence[tuple[Mutation, tuple[float, ...]]],
                        current: Mapping[str, float]) -> list[Mutation]:
     """The fixes worth shrinking: per parameter set and direction the least change that
-    repairs, and of those the SHRINK_CANDIDATES with the fewest parameters whose drive departs
-    least from the accident's (objectives: change, dissimilarity)."""
+    repairs, and of those the SHRINK_CANDIDATES with the fewest parameters, those that undo a
+    departure from the defaults first, whose drive departs least from the accident's
+    (objectives: change, dissimilarity)."""
     least: dict[tuple[tuple[str, bool], ...], tuple[Mutation, tuple[float, ...]]] = {}
     for m, obj in sorted(found, key=lambda f: (f[1][0], f[1][1], f[0].names)):
         key = tuple((n, float(v) > current.get(n, 0.0)) for n, v in sorted(m.values.items()))
         least.setdefault(key, (m, obj))
-    ranked = sorted(least.values(), key=lambda f: (len(f[0].values), f[1][1], f[1][0],
-                                                   f[0].names))
+    ranked = sorted(least.values(), key=lambda f: (len(f[0].values), not restores(f[0], current),
+                                                   f[1][1], f[1][0], f[0].names))
     return [m for m, _ in ranked[:SHRINK_CANDIDATES]]
 
 
@@ -238,9 +327,10 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
            ) -> list[dict[str, float]]:
     """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
     current = dict(accident.params)
-    space = cyber_space(module, current)
-    if not space.variables:
-        return []
+    searched = cyber_space(module, current)
+    # the driver's whole space measures and shrinks every fix: the counterfactual restorations
+    # reach parameters of every module, the search only the named module's
+    space = cyber_space("driver", current)
     until = _until(accident)
 
     def tasks(ms: list[Mutation]) -> list[SimTask]:
@@ -252,17 +342,24 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
         return [((space.distance(m), ego_dissimilarity(accident.ego[:, :2], r.ego[:, :2], until)),
                  r.constraint()) for m, r in zip(ms, runs, strict=True)]
 
-    cfg = SearchConfig(population=budget.cyber_population, generations=budget.cyber_generations,
-                       seed=seed, screen=True, stop_when_feasible_after=1)
-    result = run_search(space, evaluate, cfg, 2,
-                        screening_suffices=lambda cs: any(c.feasible for c in cs))
-    # the screening tries each parameter at its range's ends and halfway to them; a fix that
-    # lies between (a heading gain that repairs from 20 /s only below 7 /s, and overshoots at
-    # 0.5 /s) is found by the quarter points, tried here one parameter at a time
-    scan = quarter_points(space)
-    found = [(c.mutation, c.objectives) for c in result.feasible]
-    found += [(m, objectives) for m, (objectives, constraint)
-              in zip(scan, evaluate(scan), strict=True) if constraint <= 0]
+    # the counterfactual of each departure from the defaults first (one run each): an
+    # accident that a departure's undoing avoids is explained by that departure
+    back = restorations(space, current)
+    found = [(m, objectives) for m, (objectives, constraint)
+             in zip(back, evaluate(back), strict=True) if constraint <= 0]
+    if searched.variables:
+        cfg = SearchConfig(population=budget.cyber_population,
+                           generations=budget.cyber_generations, seed=seed, screen=True,
+                           stop_when_feasible_after=1)
+        result = run_search(searched, evaluate, cfg, 2,
+                            screening_suffices=lambda cs: any(c.feasible for c in cs))
+        # the screening tries each parameter at its range's ends and halfway to them; a fix
+        # that lies between (a heading gain that repairs from 20 /s only below 7 /s, and
+        # overshoots at 0.5 /s) is found by the quarter points, one parameter at a time
+        scan = quarter_points(searched)
+        found += [(c.mutation, c.objectives) for c in result.feasible]
+        found += [(m, objectives) for m, (objectives, constraint)
+                  in zip(scan, evaluate(scan), strict=True) if constraint <= 0]
     if not found:
         return []
     candidates = _shrink_candidates(found, current)
@@ -276,15 +373,19 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     smalls, _ = shrink_sets(candidates, holds)
     smalls, _ = shrink_all_magnitudes(smalls, space, holds)
     runs = {id(m): r for m, r in zip(smalls, runner.runs(tasks(smalls)), strict=True)}
-    # the counterfactual closest to the accident wins: among repairing fixes with the fewest
-    # parameters, the one whose drive departs least from the accident's (the paper's second
-    # objective), then the smallest change. A change that is small in its parameter's range
-    # may still remake the drive (a stiffer lateral gain damping a heading oscillation the
-    # accident's heading gain caused); the shrunk fixes all lie at their repair's edge, so
-    # their sizes say less than what they do to the drive
-    # ... and a parameter that repairs when moved either way ranks after the rest: the
-    # accident hangs on its exact value (MOBIL's decision phase at the ramp's end), not on it
-    # being too high or too low, so no direction of it is the cause
+    # the ranking of the repairing fixes, fewest parameters first:
+    # 1. one that undoes a departure from the declared defaults, before one that retunes a
+    #    parameter the configuration left at its default: both avoid the accident, but only
+    #    the first names something the configuration changed (a stiffer lateral gain also
+    #    damps the oscillation an over-tuned heading gain causes; the heading gain is what
+    #    was changed), whatever else of the parameter's range happens to repair too;
+    # 2. a parameter that repairs when moved either way after the rest: the accident hangs on
+    #    its exact value (MOBIL's decision phase at the ramp's end), not on it being too high
+    #    or too low, so no direction of it is the cause;
+    # 3. the counterfactual closest to the accident: the drive that departs least from the
+    #    accident's (the paper's second objective), then the smallest change. A change that is
+    #    small in its parameter's range may still remake the drive; the shrunk fixes all lie at
+    #    their repair's edge, so their sizes say less than what they do to the drive
     fixed = [m for m in dict.fromkeys(smalls) if repairs(runs[id(m)])]
     ways = {(n, float(v) > current.get(n, 0.0)) for m in fixed for n, v in m.values.items()}
 
@@ -292,7 +393,7 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
         return any((n, float(v) <= current.get(n, 0.0)) in ways for n, v in m.values.items())
 
     ranked = sorted(dict.fromkeys(smalls), key=lambda m: (
-        not repairs(runs[id(m)]), len(m.values), two_way(m),
+        not repairs(runs[id(m)]), len(m.values), not restores(m, current), two_way(m),
         ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until),
         space.distance(m), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
@@ -320,9 +421,6 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     Raises:
         NotReproducedError: the scene has no accident with these parameters.
     """
-    from rocas.analysis.diff import diff
-    from rocas.stacks.highway.record import record
-
     runner = _Runner(executor or SerialExecutor())
     p = tuple(sorted((params or {}).items()))
     t0 = time.perf_counter()
@@ -333,17 +431,14 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     secs: dict[str, float] = {}
     sims: dict[str, int] = {}
     sseed = seed if search_seed is None else search_seed
-    reference, change = _physical(accident, p, runner, budget, sseed)
+    reference, change, others = _physical(accident, p, runner, budget, sseed)
     secs["physical"], sims["physical"] = time.perf_counter() - t0, runner.count
-    module = None
     t0 = time.perf_counter()
+    modules: tuple[str | None, ...] = ()
     if reference is not None:
-        with tempfile.TemporaryDirectory(prefix="rocas-highway-") as tmp:
-            a, b = Path(tmp, "accident.mcap"), Path(tmp, "reference.mcap")
-            record(scene, a, dict(p), seed)
-            record(reference.scene, b, dict(p), seed)
-            module = diff(a, b).deviating_module
-    secs["diff"], sims["diff"] = time.perf_counter() - t0, 2 if reference is not None else 0
+        modules = _diff_references(scene, (reference.scene, *others), dict(p), seed)
+    module = modules[0] if modules else None
+    secs["diff"], sims["diff"] = time.perf_counter() - t0, len(modules) + bool(modules)
     # perception, the vehicle and the world have no parameters: a walk that ends there (the
     # reference changed the traffic, which the driver perceives exactly) leaves the search to
     # every driver parameter; so does a named module whose own parameters hold no fix
@@ -376,5 +471,5 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         fix_run = runner.runs([(scene, tuple(sorted({**dict(p), **fix}.items())), seed)])[0]
     secs["validation"], sims["validation"] = time.perf_counter() - t0, runner.count - before
     return Analysis(accident, reference, dict(change.values), module, searched, fix,
-                    tuple(fixes[1:]), fix_run,
+                    tuple(fixes[1:]), fix_run, modules,
                     validated, variants, secs, sims)

@@ -378,6 +378,11 @@ def diff_markdown(a: Analysis) -> str:
     module = a.deviating_module
     rows += ["", f"**Initial deviating module: {markdown_text(module)}**" if module else
              "**The diff named no deviating module.**"]
+    agree = a.agreement
+    if agree is not None and agree["runs"] > 1:
+        named = ", ".join(markdown_text(m or "none") for m in a.reference_modules)
+        rows += ["", f"Confidence: **{a.confidence}**: {agree['same']} of {agree['runs']} "
+                 f"references name it (their modules, chosen reference first: {named})."]
     if a.module != module:
         rows += ["", f"The answer's module is the fix's, **{markdown_text(a.module)}**: the "
                  "diff's module has no parameters, or none of them held a fix."]
