@@ -73,6 +73,20 @@ class SubstitutionRun:
         return cls(substituted, r.accident, r.collided, r.off_road, r.accident_t_s,
                    r.collided_with, len(r.times), r.min_margin_m, r.digest())
 
+    def what(self) -> str:
+        """The accident in words: ``"off the road"``, ``"hit vehicle 2"``, ``"hit an object"``
+        (``"none"`` without one)."""
+        if self.off_road:
+            return "off the road"
+        if self.collided:
+            return f"hit vehicle {self.collided_with}" if self.collided_with > 0 else "hit an object"
+        return "none"
+
+    def same_accident(self, other: SubstitutionRun) -> bool:
+        """Both runs have an accident of the same kind with the same partner (off the road,
+        or a collision with the same vehicle or with a road object), whenever it happens."""
+        return self.accident and other.accident and self.what() == other.what()
+
     def to_dict(self) -> dict[str, Any]:
         return {"substituted": list(self.substituted), "accident": self.accident,
                 "collided": self.collided, "off_road": self.off_road,
@@ -90,7 +104,8 @@ class SubstitutionOpinion:
         ideal_control: the run with ideal control.
         module: ``"control"`` when ideal control avoids the accident, ``"planning"`` when it
             persists (by elimination: perception is exact; the accident may also be
-            unavoidable), None without an accident.
+            unavoidable), None without an accident or when ideal control's run meets another
+            accident first (:func:`second_opinion`).
         reason: one sentence saying how ``module`` was chosen or why there is none.
         cleared: modules whose ideal counterpart leaves the accident (perception always, as
             it is exact; control when the accident persists under ideal control).
@@ -110,28 +125,43 @@ class SubstitutionOpinion:
         - ``agrees``: substitution names the same module.
         - ``consistent``: substitution names planning by elimination and the other method
           named no driver module (None, the world or the vehicle): both allow an accident
-          that belongs to the scene.
+          that belongs to the scene; or substitution names none and ``module`` is not one
+          it cleared.
         - ``disagrees``: substitution names another module, or cleared ``module``.
         - ``undetermined``: the run has no accident to explain.
         """
         if not self.accident:
             return "undetermined"
+        if self.module is None:  # ideal control met another accident first
+            return "disagrees" if module in self.cleared else "consistent"
         if module == self.module:
             return "agrees"
-        if self.module == "planning" and module not in (*self.cleared, "planning"):
+        if self.module == "planning" and module not in self.cleared:
             return "consistent"
         return "disagrees"
+
+    @property
+    def other_accident(self) -> bool:
+        """Whether ideal control's run has an accident other than this one."""
+        return self.ideal_control.accident and not self.ideal_control.same_accident(
+            self.baseline)
 
     def to_dict(self) -> dict[str, Any]:
         return {"module": self.module, "reason": self.reason, "accident": self.accident,
                 "cleared": list(self.cleared), "baseline": self.baseline.to_dict(),
-                "ideal_control": self.ideal_control.to_dict()}
+                "ideal_control": self.ideal_control.to_dict(),
+                "other_accident": self.other_accident}
 
 
 def second_opinion(scene: Scene, params: Mapping[str, float] | None = None,
                    seed: int = 0) -> SubstitutionOpinion:
     """Run the accident as it is and with ideal control (two simulations, serial) and name
-    the module substitution implicates.
+    the module substitution implicates (:func:`judge`).
+
+    The accident "disappears" under ideal control when that run has no accident, or has
+    another one (:meth:`SubstitutionRun.same_accident`) only after the accident's time: a
+    different trajectory can meet a different hazard later, which is not this accident.
+    Another accident before it leaves no conclusion (``module`` None).
 
     Args:
         scene: the accident's scene.
@@ -141,17 +171,34 @@ def second_opinion(scene: Scene, params: Mapping[str, float] | None = None,
     baseline = SubstitutionRun.of((), simulate(scene, params, seed))
     ideal = SubstitutionRun.of(("control",), simulate(scene, params, seed,
                                                       substitute="control"))
+    return judge(baseline, ideal)
+
+
+def judge(baseline: SubstitutionRun, ideal: SubstitutionRun) -> SubstitutionOpinion:
+    """The opinion from the run as it is and the run with ideal control
+    (:func:`second_opinion`'s rule)."""
     if not baseline.accident:
         return SubstitutionOpinion(False, baseline, ideal, None,
                                    "the run has no accident with the ego as it is", EXACT)
+    if ideal.same_accident(baseline):
+        return SubstitutionOpinion(
+            True, baseline, ideal, "planning",
+            "ideal control leaves the accident and perception is exact: the cause is "
+            "planning, or no driver could avoid it", (*EXACT, "control"))
     if not ideal.accident:
         return SubstitutionOpinion(True, baseline, ideal, "control",
                                    "ideal control avoids the accident (perception is exact)",
                                    EXACT)
+    t_ideal, t_base = ideal.accident_t_s or 0.0, baseline.accident_t_s or 0.0  # both set
+    if t_ideal >= t_base:
+        return SubstitutionOpinion(
+            True, baseline, ideal, "control",
+            f"ideal control avoids the accident (perception is exact); its run meets another "
+            f"one ({ideal.what()}) at {t_ideal:.2f} s", EXACT)
     return SubstitutionOpinion(
-        True, baseline, ideal, "planning",
-        "ideal control leaves the accident and perception is exact: the cause is planning, "
-        "or no driver could avoid it", (*EXACT, "control"))
+        True, baseline, ideal, None,
+        f"ideal control meets another accident ({ideal.what()}) at {t_ideal:.2f} s, before "
+        f"this one's time: substitution cannot tell", EXACT)
 
 
-__all__ = ["EXACT", "Stance", "SubstitutionOpinion", "SubstitutionRun", "second_opinion"]
+__all__ = ["EXACT", "Stance", "SubstitutionOpinion", "SubstitutionRun", "judge", "second_opinion"]
