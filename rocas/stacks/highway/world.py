@@ -18,10 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from rocas.errors import ScenarioError
+from rocas.errors import ScenarioError, UsageError
 from rocas.stacks.base import StackParams
 from rocas.stacks.highway.driver import DecisionFrame, ego_class
 from rocas.stacks.highway.hwenv import require
+from rocas.stacks.highway.ideal import SUBSTITUTES, ideal_control_class
 from rocas.stacks.highway.params import constant_name, parameters
 from rocas.stacks.highway.scene import Scene, VehicleSpec
 
@@ -148,15 +149,23 @@ def _place(road: Any, cls: type, spec: VehicleSpec, vid: int) -> Any:
     return v
 
 
-def build(scene: Scene, params: StackParams, seed: int) -> Simulation:
-    """The scene in highway-env, with the ego driven by ``params`` (full names -> values)."""
+def build(scene: Scene, params: StackParams, seed: int,
+          substitute: str | None = None) -> Simulation:
+    """The scene in highway-env, with the ego driven by ``params`` (full names -> values);
+    ``substitute`` ``"control"``: with its control replaced by ideal control
+    (:mod:`rocas.stacks.highway.ideal`)."""
     require()
+    if substitute is not None and substitute not in SUBSTITUTES:
+        raise UsageError(f"the highway ego has no ideal {substitute!r} module",
+                         f"substitutable: {', '.join(SUBSTITUTES)}")
     env = _attr(_ENV_CLASSES, scene.env_id)(config=_env_config(scene))
     env.reset(seed=int(seed))
     road = env.road
     road.vehicles = []
     road.np_random = np.random.default_rng([int(seed), ROAD_SEED_STREAM])
-    ego_cls = ego_class({constant_name(n): params[n] for n in params})
+    constants = {constant_name(n): params[n] for n in params}
+    ego_cls = (ego_class(constants) if substitute is None
+               else ideal_control_class(constants, 1.0 / scene.frequency_hz))
     ego = _place(road, ego_cls, scene.ego, 0)
     others = []
     for i, spec in enumerate(scene.others, start=1):
@@ -173,11 +182,12 @@ TickObserver = Callable[[int, float, Simulation, DecisionFrame], None]
 
 
 def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = None,
-             seed: int = 0, observer: TickObserver | None = None) -> RunResult:
+             seed: int = 0, observer: TickObserver | None = None,
+             substitute: str | None = None) -> RunResult:
     """Run ``scene`` with the ego driver's parameters ``params`` (overrides of the defaults)
-    and judge it."""
+    and judge it; ``substitute`` as for :func:`build`."""
     p = params if isinstance(params, StackParams) else StackParams(parameters(), params or {})
-    sim = build(scene, p, seed)
+    sim = build(scene, p, seed, substitute)
     road, ego, dt = sim.road, sim.ego, sim.dt_s
     a = len(sim.others)
     times, ego_rows, other_rows, steering = [], [], [], []
