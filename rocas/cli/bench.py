@@ -140,7 +140,7 @@ def _mark(ok: bool) -> str:
 def _confidence_cell(c: dict | None) -> str:
     if not c:
         return "—"
-    text = f"{c['level']} {c['same']}/{c['runs']}"
+    text = f"{c['level']} {c['same']}/{c['runs']}" if c["runs"] else c["level"]
     if c["stance"]:
         text += f", subst. {c['stance']}"
     return text

@@ -113,7 +113,7 @@ def agreement_summary(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
     return {"analyses": len(conf),
             **{lvl: sum(c["level"] == lvl for c in conf) for lvl in ("stable", "contested", "unstable")},
             "adopted": sum(c["adopted"] for c in conf),
-            "unanimous": sum(c["same"] == c["runs"] for c in conf),
+            "unanimous": sum(0 < c["runs"] == c["same"] for c in conf),
             "second_opinion_agrees": sum(c["stance"] in ("agrees", "consistent") for c in conf)}
 
 

@@ -90,7 +90,9 @@ class HighwayReport:
                 "verdict": self.verdict, "deviating_module": a.module,
                 "diff_module": a.deviating_module, "searched_module": a.searched_module,
                 "confidence": {"level": a.confidence, "agreement": a.agreement,
-                               "reference_modules": list(a.reference_modules)},
+                               "reference_modules": list(a.reference_modules),
+                               "substitution": None if a.substitution is None else {
+                                   "stance": a.stance, **a.substitution.to_dict()}},
                 "triggering_entity": {"entity": who, "property": prop} if who else None,
                 "reference_change": dict(a.reference_change),
                 "misconfiguration": [{"parameter": k, "original": original[k], "mutated": v}

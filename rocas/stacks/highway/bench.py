@@ -18,9 +18,22 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from rocas.errors import UsageError
+from rocas.pipeline.bench import agreement_summary
 from rocas.stacks.highway.accidents import CatalogEntry, entries, entry
 from rocas.stacks.highway.analysis import HighwayReport, _executor, trigger
 from rocas.stacks.highway.comutation import Analysis, Budget, analyze
+
+
+def confidence_row(a: Analysis) -> dict[str, Any] | None:
+    """The confidence in the bench row's shape (:func:`rocas.pipeline.bench._confidence`):
+    level, references naming the answer's module of those diffed, substitution's stance and
+    module; no other reference is ever adopted here."""
+    if a.confidence is None:
+        return None
+    agree = a.agreement or {"same": 0, "runs": 0}
+    return {"level": a.confidence, "same": agree["same"], "runs": agree["runs"],
+            "adopted": False, "stance": a.stance,
+            "substitution": None if a.substitution is None else a.substitution.module}
 
 
 def row(e: CatalogEntry, a: Analysis, seconds: float) -> dict[str, Any]:
@@ -48,7 +61,7 @@ def row(e: CatalogEntry, a: Analysis, seconds: float) -> dict[str, Any]:
             "expected": expected, "found": found, "marks": marks, "hit": marks["hit"],
             "seconds": round(seconds, 2), "timings_s": dict(a.seconds),
             "simulations": dict(a.simulations), "diff_module": a.deviating_module,
-            "confidence": a.confidence}
+            "confidence": confidence_row(a)}
 
 
 def _sums(rows: Sequence[Mapping[str, Any]], key: str) -> dict[str, float]:
@@ -75,7 +88,8 @@ def bench_seed(chosen: Sequence[CatalogEntry], seed: int, ex: Any, *, budget: Bu
     seconds = _sums(rows, "timings_s")
     whole = sum(seconds.values()) or 1.0
     return {"stack": "highway", "seed": seed, "entries": rows,
-            "hits": sum(r["hit"] for r in rows), "total": len(rows), "agreement": None,
+            "hits": sum(r["hit"] for r in rows), "total": len(rows),
+            "agreement": agreement_summary(rows),
             "time_breakdown": {k: round(v / whole, 4) for k, v in seconds.items()},
             "time_total_s": round(whole, 2),
             "time_per_phase_s": {k: round(v, 2) for k, v in seconds.items()},

@@ -38,6 +38,7 @@ from rocas.search.minimize import shrink_all_magnitudes, shrink_sets
 from rocas.search.objectives import ego_dissimilarity
 from rocas.stacks.highway.params import parameters
 from rocas.stacks.highway.scene import KINDS, Scene
+from rocas.stacks.highway.substitution import SubstitutionOpinion, SubstitutionRun, judge
 from rocas.stacks.highway.world import RunResult, simulate
 
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
@@ -54,6 +55,12 @@ def run_task(task: SimTask) -> RunResult:
     """One simulation (module level, so worker processes can run it)."""
     scene, params, seed = task
     return simulate(scene, dict(params), seed)
+
+
+def run_substituted(task: SimTask) -> RunResult:
+    """One simulation with ideal control (:mod:`rocas.stacks.highway.ideal`)."""
+    scene, params, seed = task
+    return simulate(scene, dict(params), seed, substitute="control")
 
 
 @dataclass(frozen=True)
@@ -81,6 +88,8 @@ class Analysis:
         fix_run: the accident scene with the fix (None without a fix).
         reference_modules: the diff's module against the chosen reference, then against each
             other reference of the confidence (empty without a reference).
+        substitution: module substitution's second opinion (ideal control;
+            :mod:`rocas.stacks.highway.substitution`), which needs no reference.
         validated: variants the fix avoids, of ``variants`` that crash unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
         simulations: simulations per phase (physical, with the accident's own run; diff, the
@@ -96,6 +105,7 @@ class Analysis:
     alternatives: tuple[Mapping[str, float], ...]
     fix_run: RunResult | None
     reference_modules: tuple[str | None, ...]
+    substitution: SubstitutionOpinion | None
     validated: int
     variants: int
     seconds: Mapping[str, float]
@@ -114,21 +124,32 @@ class Analysis:
 
     @property
     def agreement(self) -> Mapping[str, object] | None:
-        """How many references' diffs name the chosen reference's module
-        (:func:`rocas.pipeline.confidence.agreement`; None without a reference)."""
-        from rocas.pipeline.confidence import agreement
+        """How many of the references' diffs name the answer's module (``module``: the
+        diff's, or the fix's when it was revised): ``{"module", "runs", "same"}``, None
+        without a reference."""
+        if not self.reference_modules:
+            return None
+        return {"module": self.module, "runs": len(self.reference_modules),
+                "same": sum(m == self.module for m in self.reference_modules)}
 
-        return agreement(list(self.reference_modules)) if self.reference_modules else None
+    @property
+    def stance(self) -> str | None:
+        """Module substitution's stance on the answer's module (agrees, consistent,
+        disagrees, undetermined; :meth:`SubstitutionOpinion.stance`), None if not asked."""
+        return None if self.substitution is None else self.substitution.stance(self.module)
 
     @property
     def confidence(self) -> str | None:
-        """stable / contested / unstable, as the built-in pipeline's confidence in the diff's
-        module over several references (:func:`rocas.pipeline.confidence.level`; no module
-        substitution for this stack)."""
+        """stable / contested / unstable by the built-in pipeline's rule
+        (:func:`rocas.pipeline.confidence.level`): more than half of the references' diffs
+        name the answer's module, and module substitution supports it; one of the two; neither.
+        None when neither was asked (no reference and no substitution)."""
         from rocas.pipeline.confidence import level
 
-        agree = self.agreement
-        return None if agree is None else level(dict(agree), None)
+        agree = self.agreement or {"runs": 0, "same": 0}
+        if self.agreement is None and self.substitution is None:
+            return None
+        return level(dict(agree), self.stance)
 
     def summary(self) -> str:
         s, n = self.seconds, self.simulations
@@ -136,10 +157,13 @@ class Analysis:
         others = "; ".join(", ".join(f"{k}={v:.3g}" for k, v in sorted(a.items()))
                            for a in self.alternatives) or "none"
         agree = self.agreement
-        refs = (f", {agree['same']}/{agree['runs']} references agree: {self.confidence}"
-                if agree else "")
-        return (f"{self.accident.scene.name}: module {self.module} (diff "
-                f"{self.deviating_module}{refs}, searched {self.searched_module}); fix {fix} "
+        refs = f", {agree['same']}/{agree['runs']} references name it" if agree else ""
+        if self.stance is not None:
+            refs += f", substitution {self.stance}"
+        if self.confidence is not None:
+            refs += f": {self.confidence}"
+        return (f"{self.accident.scene.name}: module {self.module}{refs} (diff "
+                f"{self.deviating_module}, searched {self.searched_module}); fix {fix} "
                 f"(other fixes: {others}); validated "
                 f"{self.validated}/{self.variants}\n  time physical {s['physical']:.1f} s, diff "
                 f"{s['diff']:.1f} s, cyber {s['cyber']:.1f} s, validation "
@@ -205,9 +229,10 @@ class _Runner:
         self.executor = executor
         self.count = 0
 
-    def runs(self, tasks: Sequence[SimTask]) -> list[RunResult]:
+    def runs(self, tasks: Sequence[SimTask], substitute: str | None = None
+             ) -> list[RunResult]:
         self.count += len(tasks)
-        return self.executor.map(run_task, list(tasks))
+        return self.executor.map(run_substituted if substitute else run_task, list(tasks))
 
 
 def _until(accident: RunResult) -> int:
@@ -441,7 +466,11 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     if reference is not None:
         modules = _diff_references(scene, (reference.scene, *others), dict(p), seed)
     module = modules[0] if modules else None
-    secs["diff"], sims["diff"] = time.perf_counter() - t0, len(modules) + bool(modules)
+    # module substitution's second opinion needs no reference: the accident with ideal control
+    ideal = runner.runs([(scene, p, seed)], substitute="control")[0]
+    opinion = judge(SubstitutionRun.of((), accident), SubstitutionRun.of(("control",), ideal))
+    secs["diff"] = time.perf_counter() - t0
+    sims["diff"] = len(modules) + bool(modules) + 1
     # perception, the vehicle and the world have no parameters: a walk that ends there (the
     # reference changed the traffic, which the driver perceives exactly) leaves the search to
     # every driver parameter; so does a named module whose own parameters hold no fix
@@ -474,5 +503,5 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         fix_run = runner.runs([(scene, tuple(sorted({**dict(p), **fix}.items())), seed)])[0]
     secs["validation"], sims["validation"] = time.perf_counter() - t0, runner.count - before
     return Analysis(accident, reference, dict(change.values), module, searched, fix,
-                    tuple(fixes[1:]), fix_run, modules,
+                    tuple(fixes[1:]), fix_run, modules, opinion,
                     validated, variants, secs, sims)

@@ -365,7 +365,7 @@ def diff_markdown(a: Analysis) -> str:
         rows += ["**No reference**: the physical search found no nearby scene without the "
                  "accident, so there was nothing to diff; the cyber search covered "
                  f"{markdown_text(a.searched_module or 'driver')}."]
-        return "\n".join(rows) + "\n"
+        return "\n".join(rows + confidence_markdown(a)) + "\n"
     who, prop = trigger(a)
     space = physical_space(a.accident.scene)
     rows += [f"Reference: {_outcome_text(a.reference)}. The physical search changed:", "",
@@ -378,15 +378,25 @@ def diff_markdown(a: Analysis) -> str:
     module = a.deviating_module
     rows += ["", f"**Initial deviating module: {markdown_text(module)}**" if module else
              "**The diff named no deviating module.**"]
-    agree = a.agreement
-    if agree is not None and agree["runs"] > 1:
-        named = ", ".join(markdown_text(m or "none") for m in a.reference_modules)
-        rows += ["", f"Confidence: **{a.confidence}**: {agree['same']} of {agree['runs']} "
-                 f"references name it (their modules, chosen reference first: {named})."]
     if a.module != module:
         rows += ["", f"The answer's module is the fix's, **{markdown_text(a.module)}**: the "
                  "diff's module has no parameters, or none of them held a fix."]
-    return "\n".join(rows) + "\n"
+    return "\n".join(rows + confidence_markdown(a)) + "\n"
+
+
+def confidence_markdown(a: Analysis) -> list[str]:
+    """The confidence in the answer's module: the references' diffs and module substitution."""
+    if a.confidence is None:
+        return []
+    rows = ["", f"Confidence in **{markdown_text(a.module or 'none')}**: **{a.confidence}**."]
+    agree = a.agreement
+    if agree is not None:
+        named = ", ".join(markdown_text(m or "none") for m in a.reference_modules)
+        rows.append(f"{agree['same']} of {agree['runs']} references' diffs name it (their "
+                    f"modules, the chosen reference's first: {named}).")
+    if a.substitution is not None:
+        rows.append(f"Module substitution {a.stance}: {markdown_text(a.substitution.reason)}.")
+    return rows
 
 
 def fix_markdown(a: Analysis) -> str:

@@ -17,6 +17,7 @@ from rocas.stacks.highway.__main__ import main as highway_main  # noqa: E402
 from rocas.stacks.highway.accidents import entry  # noqa: E402
 from rocas.stacks.highway.comutation import Analysis, apply_physical  # noqa: E402
 from rocas.stacks.highway.view import write_analysis_rrd  # noqa: E402
+from rocas.stacks.highway.substitution import second_opinion  # noqa: E402
 from rocas.stacks.highway.world import simulate  # noqa: E402
 
 from .scenes import PLANTED, WEAK_BRAKES  # noqa: E402
@@ -33,9 +34,10 @@ def _analysis(scene=PLANTED) -> Analysis:
     fix = {"control.ACC_MAX": 3.33}
     fix_run = simulate(scene, {**WEAK_BRAKES, **fix}, 0)
     assert accident.collided and not reference.accident and not fix_run.accident
+    opinion = second_opinion(scene, WEAK_BRAKES, 0)
     return Analysis(accident, reference, {"v1.speed": 1.75}, "perception", "driver", fix,
                     ({"planning.LANE_CHANGE_MIN_ACC_GAIN": 1.94},), fix_run,
-                    ("perception", "perception", "planning"), 3, 4, SECONDS,
+                    ("perception", "control", "planning"), opinion, 3, 4, SECONDS,
                     SIMULATIONS)
 
 
@@ -102,7 +104,11 @@ def test_the_crash_and_the_answer_read_as_text(analysis, tmp_path):
     assert "planning.LANE_CHANGE_MIN_ACC_GAIN = 1.94" in fix
     diff = _text(out, "/report/diff")
     assert "**Initial deviating module: perception**" in diff
-    assert "Confidence: **stable**: 2 of 3 references name it" in diff
+    # the answer (control, the fix's module) is named by one reference's diff of three, and
+    # ideal control avoids the weak brakes' crash: one of the two supports it
+    assert "Confidence in **control**: **contested**." in diff
+    assert "1 of 3 references' diffs name it" in diff
+    assert "Module substitution agrees: ideal control avoids the accident" in diff
     assert "| v1.speed (trigger) | 2.484 | 1.75 |" in diff
     assert "the fix's, **control**" in diff  # the answer's module, revised to the fix's
     verdict = _text(out, "/report/verdict")
@@ -130,7 +136,8 @@ def test_the_road_is_highway_envs_and_the_vehicles_stand_where_they_drove(analys
 def test_an_analysis_without_reference_or_fix_shows_the_accident_alone(tmp_path):
     e = entry("h06")
     accident = simulate(e.scene, e.params, e.seed)
-    a = Analysis(accident, None, {}, None, "driver", {}, (), None, (), 0, 0, SECONDS, SIMULATIONS)
+    a = Analysis(accident, None, {}, None, "driver", {}, (), None, (), None, 0, 0, SECONDS,
+                 SIMULATIONS)
     out = tmp_path / "h06.rrd"
     assert write_analysis_rrd(out, a) == ("accident",)
     entities, _ = read_rrd(out)
@@ -156,7 +163,8 @@ def test_names_from_the_data_are_text_never_paths_nor_markup(tmp_path):
 def test_merge_v0s_obstacle_is_drawn(tmp_path):
     e = entry("h02")
     accident = simulate(e.scene, e.params, e.seed)
-    a = Analysis(accident, None, {}, None, "driver", {}, (), None, (), 0, 0, SECONDS, SIMULATIONS)
+    a = Analysis(accident, None, {}, None, "driver", {}, (), None, (), None, 0, 0, SECONDS,
+                 SIMULATIONS)
     out = tmp_path / "h02.rrd"
     write_analysis_rrd(out, a)
     (label,) = _rows(out, "/world/accident/crash/label", "Points2D:labels")
