@@ -90,7 +90,8 @@ class Analysis:
             other reference of the confidence (empty without a reference).
         substitution: module substitution's second opinion (ideal control;
             :mod:`rocas.stacks.highway.substitution`), which needs no reference.
-        validated: variants the fix avoids, of ``variants`` that crash unfixed.
+        validated: variants the fix's claim avoids (:func:`claim`: an undoing of departures
+            with them undone), of ``variants`` that crash unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
         simulations: simulations per phase (physical, with the accident's own run; diff, the
             two recorded runs; cyber; validation).
@@ -427,6 +428,18 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 
+def claim(fix: Mapping[str, float], current: Mapping[str, float]) -> dict[str, float]:
+    """What validation tries of a fix: a fix that undoes departures from the defaults
+    (:func:`restores`) claims the departures caused the accident, so its parameters go back to
+    their defaults; any other fix claims its values avoid it, and is tried as it is. (The
+    shrunk undoing lies at the edge of what repairs this one scene; the variants ask whether
+    the departure, not that edge, is the cause.)"""
+    if not restores(Mutation(dict(fix)), current):
+        return dict(fix)
+    home = defaults()
+    return {n: home[n] for n in fix}
+
+
 def scene_variants(scene: Scene, count: int, seed: int) -> list[Scene]:
     """Seeded small perturbations of the other vehicles (+-2 m, +-0.5 m/s)."""
     rng = np.random.default_rng([seed, 3939])
@@ -485,14 +498,14 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     t0, before = time.perf_counter(), runner.count
     fix_run, validated, variants = None, 0, 0
     if fixes:
-        # the variants that still crash unfixed; each shrunk fix is tried on them and the one
-        # that avoids the most wins (ties: smallest change): a fix that only shifted a
+        # the variants that still crash unfixed; each shrunk fix's claim is tried on them and
+        # the one that avoids the most wins (ties: the ranking): a fix that only shifted a
         # decision's timing in this one scene rarely survives them
         vs = scene_variants(scene, budget.validation_variants, sseed)
         unfixed = runner.runs([(v, p, seed) for v in vs])
         crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
         variants = len(crashing)
-        tried = runner.runs([(v, tuple(sorted({**dict(p), **f}.items())), seed)
+        tried = runner.runs([(v, tuple(sorted({**dict(p), **claim(f, dict(p))}.items())), seed)
                              for f in fixes for v in crashing])
         n = len(crashing)
         scores = [sum(not r.accident for r in tried[i * n:(i + 1) * n])
