@@ -18,6 +18,7 @@ import statistics
 import sys
 import time
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +69,61 @@ def restores(fix: Mapping[str, float], name: str, injected: float, default: floa
     return moved is not None and np.sign(moved - injected) == np.sign(default - injected)
 
 
+@dataclass(frozen=True)
+class Row:
+    """One analysed accident: the injected parameter and what rocas answered."""
+
+    name: str
+    hit: bool  # the chosen fix moves the injected parameter back
+    among: bool  # ... or one of the other shrunk fixes does
+    diff_module: bool  # the diff against the chosen reference named the injected module
+    module: bool  # the answer's module is the injected parameter's
+    substitution: bool  # module substitution named the injected parameter's module
+    confidence: str | None
+    departures: int  # other parameters off their defaults (--departures)
+    rivals: int  # ... of which undoing one alone also avoids the accident
+    seconds: float
+
+
+def rivals(scene, tuned: Mapping[str, float], name: str, value: float,
+           defaults: Mapping[str, float]) -> int:
+    """The other departures whose undoing alone also avoids the accident (what makes picking
+    the injected one among them more than reading the configuration)."""
+    return sum(not simulate(scene, {**tuned, name: value, k: defaults[k]}, 0).accident
+               for k in tuned)
+
+
+def analyse(args: argparse.Namespace, executor) -> list[Row]:
+    defaults = {p.full_name: p.default for p in parameters()}
+    start = time.perf_counter()
+    rows: list[Row] = []
+    for scene, tuned, name, value in injected_accidents(args.seed, args.departures):
+        if len(rows) >= args.accidents or time.perf_counter() - start > args.minutes * 60:
+            break
+        t0 = time.perf_counter()
+        a = analyze(scene, {**tuned, name: value}, 0, executor=executor)
+        took = time.perf_counter() - t0
+        hit = restores(a.fix, name, value, defaults[name])
+        module = name.split(".")[0]
+        row = Row(name, hit,
+                  hit or any(restores(f, name, value, defaults[name]) for f in a.alternatives),
+                  a.deviating_module == module, a.module == module,
+                  a.substitution is not None and a.substitution.module == module,
+                  a.confidence, len(tuned), rivals(scene, tuned, name, value, defaults), took)
+        rows.append(row)
+        print(f"{scene.name:14} {name:34} {value:7.3g} ({len(tuned)} tuned, {row.rivals} "
+              f"rival) -> module {a.module} (diff {a.deviating_module}, substitution "
+              f"{a.substitution.module if a.substitution else None}, {a.confidence}) fix "
+              f"{dict(a.fix)} {'HIT' if hit else 'among others' if row.among else 'MISS'} "
+              f"{took:.1f} s ({sum(a.simulations.values())} sims)", flush=True)
+    return rows
+
+
+def share(rows: list[Row], field: str) -> str:
+    k = sum(bool(getattr(r, field)) for r in rows)
+    return f"{k}/{len(rows)} ({100 * k / len(rows):.1f} %)"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--accidents", type=int, default=100)
@@ -80,47 +136,34 @@ def main(argv: list[str] | None = None) -> int:
                          "default with this probability (0: every other parameter at its "
                          "default, as CF-RCA's injections)")
     args = ap.parse_args(argv)
-    defaults = {p.full_name: p.default for p in parameters()}
     executor = make_executor(args.executor, args.workers)
     start = time.perf_counter()
-    rows = []
     try:
-        for scene, tuned, name, value in injected_accidents(args.seed, args.departures):
-            if len(rows) >= args.accidents or time.perf_counter() - start > args.minutes * 60:
-                break
-            t0 = time.perf_counter()
-            a = analyze(scene, {**tuned, name: value}, 0, executor=executor)
-            took = time.perf_counter() - t0
-            hit = restores(a.fix, name, value, defaults[name])
-            among = hit or any(restores(f, name, value, defaults[name]) for f in a.alternatives)
-            module = name.split(".")[0]
-            rows.append((name, hit, a.deviating_module == module, took, among,
-                         a.module == module))
-            print(f"{scene.name:14} {name:42} {value:7.3g} ({len(tuned)} tuned) -> module {a.module} (diff "
-                  f"{a.deviating_module}) "
-                  f"fix {dict(a.fix)} {'HIT' if hit else 'among others' if among else 'MISS'} {took:.1f} s "
-                  f"({sum(a.simulations.values())} sims)", flush=True)
+        rows = analyse(args, executor)
     finally:
         executor.close()
-    n = len(rows)
-    if not n:
+    if not rows:
         print("no accident analysed in the time given")
         return 1
-    times = [r[3] for r in rows]
-    print(f"\naccidents analysed: {n} (aimed at {args.accidents}; "
+    times = [r.seconds for r in rows]
+    print(f"\naccidents analysed: {len(rows)} (aimed at {args.accidents}; "
           f"{time.perf_counter() - start:.0f} s in all)")
-    print(f"injected parameter moved the right way: {sum(r[1] for r in rows)}/{n} "
-          f"({100 * sum(r[1] for r in rows) / n:.1f} %)   beside {CF_RCA}")
-    print(f"... or among the other shrunk fixes shown: {sum(r[4] for r in rows)}/{n} "
-          f"({100 * sum(r[4] for r in rows) / n:.1f} %)")
-    print(f"diff named the injected parameter's module: {sum(r[2] for r in rows)}/{n} "
-          f"({100 * sum(r[2] for r in rows) / n:.1f} %)")
-    print(f"the answer's module (the diff's, revised to the fix's): {sum(r[5] for r in rows)}/{n} "
-          f"({100 * sum(r[5] for r in rows) / n:.1f} %)")
+    print(f"injected parameter moved the right way: {share(rows, 'hit')}   beside {CF_RCA}")
+    print(f"... or among the other shrunk fixes shown: {share(rows, 'among')}")
+    print(f"diff named the injected parameter's module: {share(rows, 'diff_module')}")
+    print(f"module substitution named it: {share(rows, 'substitution')}")
+    print(f"the answer's module (the diff's, revised to the fix's): {share(rows, 'module')}")
+    levels = {lvl: sum(r.confidence == lvl for r in rows)
+              for lvl in ("stable", "contested", "unstable", None)}
+    print(f"confidence: {levels}")
+    if args.departures:
+        print(f"other departures per accident: mean "
+              f"{statistics.mean(r.departures for r in rows):.1f}; accidents where undoing "
+              f"another departure alone also avoids it: {share(rows, 'rivals')}")
     print(f"time per accident: min {min(times):.1f} s, median {statistics.median(times):.1f} s")
-    for name in sorted({r[0] for r in rows}):
-        mine = [r for r in rows if r[0] == name]
-        print(f"  {name:42} {sum(r[1] for r in mine)}/{len(mine)}")
+    for name in sorted({r.name for r in rows}):
+        mine = [r for r in rows if r.name == name]
+        print(f"  {name:42} {sum(r.hit for r in mine)}/{len(mine)}")
     return 0
 
 
