@@ -90,8 +90,9 @@ class Analysis:
             other reference of the confidence (empty without a reference).
         substitution: module substitution's second opinion (ideal control;
             :mod:`rocas.stacks.highway.substitution`), which needs no reference.
-        validated: variants the fix's claim avoids (:func:`claim`: an undoing of departures
-            with them undone), of ``variants`` that crash unfixed.
+        validated: variants whose accident the fix's claim avoids (:func:`claim`: an undoing
+            of departures with them undone; :func:`avoids`), of ``variants`` that crash
+            unfixed.
         seconds: wall time per phase (physical, diff, cyber, validation).
         simulations: simulations per phase (physical, with the accident's own run; diff, the
             two recorded runs; cyber; validation).
@@ -428,6 +429,21 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
 
 
+def avoids(fixed: RunResult, unfixed: RunResult) -> bool:
+    """The fixed run avoids the unfixed run's accident: it has none, or another one (another
+    kind or partner) no earlier than the unfixed one's time; a different drive may meet a
+    different hazard later, which is not this accident (module substitution's rule,
+    :func:`rocas.stacks.highway.substitution.judge`)."""
+    if not fixed.accident:
+        return True
+
+    def kind(r: RunResult) -> tuple[bool, int]:
+        return (r.off_road, -1 if r.off_road else r.collided_with)
+
+    return kind(fixed) != kind(unfixed) and (fixed.accident_t_s or 0.0) >= (
+        unfixed.accident_t_s or 0.0)
+
+
 def claim(fix: Mapping[str, float], current: Mapping[str, float]) -> dict[str, float]:
     """What validation tries of a fix: a fix that undoes departures from the defaults
     (:func:`restores`) claims the departures caused the accident, so its parameters go back to
@@ -504,11 +520,13 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
         vs = scene_variants(scene, budget.validation_variants, sseed)
         unfixed = runner.runs([(v, p, seed) for v in vs])
         crashing = [v for v, r in zip(vs, unfixed, strict=True) if r.accident]
+        crashed = [r for r in unfixed if r.accident]
         variants = len(crashing)
         tried = runner.runs([(v, tuple(sorted({**dict(p), **claim(f, dict(p))}.items())), seed)
                              for f in fixes for v in crashing])
         n = len(crashing)
-        scores = [sum(not r.accident for r in tried[i * n:(i + 1) * n])
+        scores = [sum(avoids(r, u) for r, u in zip(tried[i * n:(i + 1) * n], crashed,
+                                                    strict=True))
                   for i in range(len(fixes))]
         best = max(range(len(fixes)), key=lambda i: (scores[i], -i))
         fixes = [fixes[best], *fixes[:best], *fixes[best + 1:]]
