@@ -65,6 +65,7 @@ def run(args: argparse.Namespace, env: Env) -> int:
                         validation_variants=args.validation, screening=args.screening,
                         alternate_references=args.references, second_opinion=args.second_opinion)
     recordings = Path(args.recordings) if args.recordings else shipped_recordings(args.stack)
+    analysed = _analysed(args.ids, args.stack, recordings, env)
     kwargs: dict[str, Any] = {"recordings": recordings, "compare_scope": args.compare_scope,
                               "stack": args.stack,
                               "instances": args.instances,
@@ -76,16 +77,35 @@ def run(args: argparse.Namespace, env: Env) -> int:
         exc.kept = (f"finished analyses and phases are kept in {args.out}; "  # type: ignore[attr-defined]
                     "the same command resumes them")
         raise
+    res = {**res, "analysed": analysed}
     if args.json:
         env.stdout.write(json_dumps(res, indent=2) + "\n")
     elif args.seeds:
         for seed, one in zip(args.seeds, res["runs"], strict=True):
             env.out().print(f"[bold]Seed {seed}[/bold]")
-            render(one, env)
+            render({**one, "analysed": res["analysed"]}, env)
         render_seeds(res, env)
     else:
         render(res, env)
     return 0
+
+
+def _analysed(ids: list[str], stack: str, recordings: Path, env: Env) -> str:
+    """What the bench analyses: ``recordings``, ``scenarios`` (simulated, none of the entries'
+    recordings is in ``recordings``) or ``recordings and scenarios``; says on stderr which
+    entries are simulated and how to point the bench at the recordings."""
+    from rocas.catalog import entries, entry
+    from rocas.pipeline.bench import recording_for
+
+    chosen = [entry(i, stack) for i in ids] if ids else list(entries(stack))
+    missing = [e.id for e in chosen if recording_for(e.key, recordings) is None]
+    if not missing:
+        return "recordings"
+    which = "no catalog recordings" if len(missing) == len(chosen) \
+        else f"no recordings of {', '.join(missing)}"
+    env.warn(f"{which} found in {recordings}/: analysing the scenarios, simulated "
+             "(--recordings DIR reads them from DIR)")
+    return "scenarios" if len(missing) == len(chosen) else "recordings and scenarios"
 
 
 #: options of ``rocas bench`` a stack's own bench takes (the others are rocas's pipeline's)
@@ -153,7 +173,10 @@ def render(res: dict, env: Env) -> None:
 
     con = env.out()
     who = f"stack {safe(res.get('stack', DEFAULT_STACK))}"
-    t = Table(title=f"Table 4 for {who}: {res['hits']} of {res['total']} hit")
+    how = {"scenarios": ", scenarios simulated (no recordings)",
+           "recordings and scenarios": ", some scenarios simulated (no recording)"
+           }.get(res.get("analysed", ""), "")
+    t = Table(title=f"Table 4 for {who}{how}: {res['hits']} of {res['total']} hit")
     for c in ("id", "trigger found", "module (expected)", "misconfiguration found (expected)",
               "verdict", "confidence", "s"):
         t.add_column(c)

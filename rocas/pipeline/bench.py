@@ -18,6 +18,7 @@ from typing import Any
 from rocas.errors import UsageError
 from rocas.pipeline.analyze import analyze
 from rocas.pipeline.config import AnalyzeConfig
+from rocas.pipeline.physical import PROPERTY_WORDS
 from rocas.scenarios.model import DEFAULT_STACK
 
 
@@ -54,12 +55,23 @@ def _same_way(expected_fixes: list[dict[str, float]], changes: list[dict[str, An
     return False
 
 
+def same_property(found: str | None, documented: str) -> bool:
+    """Whether the physical variable part ``found`` (``speed_delta_mps``) is the property the
+    catalog documents in words (``speed``; what follows the words in parentheses explains them)
+    or by that part's own name, through rocas.pipeline.physical.PROPERTY_WORDS."""
+    if found is None:
+        return False
+    words = documented.split("(", 1)[0].strip().lower()
+    return words == found.lower() or words in PROPERTY_WORDS.get(found, ())
+
+
 def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool | None]:
     """Hit marks per column: verdict, module, parameter, trigger, and the overall hit (verdict
     and module, parameter when a fix exists, and trigger when it can be scored).
 
     The trigger is scored (entity and property) when the ground truth knows the id a replay
-    gives the trigger entity (``trigger_replayed``); otherwise its mark is None.
+    gives the trigger entity (``trigger_replayed``); otherwise its mark is None. The property
+    found is a physical variable's name part, the documented one words (same_property).
 
     The parameter counts when a found change moves a documented fix's parameter in the same
     direction as that fix: a "fix" that lowers an overtake margin so the ego races ahead of the
@@ -71,7 +83,7 @@ def score(expected: dict[str, Any], found: dict[str, Any]) -> dict[str, bool | N
     trigger = None
     if expected.get("trigger_replayed"):
         trigger = (found["trigger_entity"] == expected["trigger_replayed"]
-                   and found["trigger_property"] == expected["trigger_property"])
+                   and same_property(found["trigger_property"], expected["trigger_property"]))
     return {"verdict": verdict, "module": module, "parameter": param, "trigger": trigger,
             "hit": verdict and module and param and trigger is not False}
 

@@ -41,6 +41,21 @@ ALONG_M, ACROSS_M, OBJECT_SHIFT_M = 15.0, 2.0, 3.0
 SPEED_LIFT_MPS = 3.0
 #: the values of a real property the screening tries, as fractions of its range
 SCREEN_FRACTIONS = (0.0, 0.25, 0.75, 1.0)
+#: the words a documented property (Table 1's, as a catalog's ``trigger_property`` names it)
+#: may use for each variable below, by the variable's last name part; a documented property
+#: may also name the part itself (``lateral_offset_m``)
+PROPERTY_WORDS: dict[str, tuple[str, ...]] = {
+    "model": ("model",), "color": ("color", "colour"),
+    "start_s_m": ("location", "position along"),
+    "lateral_offset_m": ("location", "lateral position", "position across"),
+    "speed_delta_mps": ("speed",),
+    "x": ("location", "position"), "y": ("location", "position"),
+    "yaw_deg": ("rotation", "heading"),
+    "enabled": ("enabled",), "policy": ("policy",),
+    "cloudiness": ("cloudiness",), "precipitation": ("precipitation",),
+    "fog_density": ("fog density", "fog"), "sun_azimuth_deg": ("sun azimuth",),
+    "sun_altitude_deg": ("sun altitude",),
+}
 
 
 def physical_space(scenario: Scenario) -> MutationSpace:

@@ -136,3 +136,48 @@ def test_a_simulated_entry_expects_the_scenarios_own_trigger_id():
                             trigger_property="color", replayed_id="obstacle_1")
     assert _expected(truth)["trigger_replayed"] == "obstacle_1"
     assert _expected(truth, replayed=False)["trigger_replayed"] == "red_truck"
+
+
+def test_a_simulated_trigger_is_scored_against_the_documented_words():
+    """A simulated entry's trigger property is a physical variable's name part
+    (``speed_delta_mps``) and the catalog documents it in Table 1's words (``speed``, with an
+    explanation in parentheses) or by that name part (the lav catalog's ``lateral_offset_m``)."""
+    from rocas.pipeline.bench import same_property, score
+
+    exp = {"verdict": "misconfiguration", "deviating_module": "planning",
+           "parameters": ["planning.x"], "fixes": [{"planning.x": 2.0}],
+           "trigger_entity": "truck", "trigger_property": "speed", "trigger_replayed": "truck"}
+    found = {"verdict": "misconfiguration", "deviating_module": "planning",
+             "parameters": ["planning.x"],
+             "changes": [{"parameter": "planning.x", "original": 1.0, "mutated": 2.0}],
+             "trigger_entity": "truck", "trigger_property": "speed_delta_mps"}
+    assert score(exp, found)["trigger"] is True and score(exp, found)["hit"]
+    wrong = score(exp, {**found, "trigger_property": "lateral_offset_m"})
+    assert wrong["trigger"] is False and not wrong["hit"]
+    assert same_property("enabled", "enabled (vegetation grown over the lane)")
+    assert same_property("policy", "policy (yellow, then red while the ego's own light is green)")
+    assert same_property("lateral_offset_m", "lateral position")
+    assert same_property("start_s_m", "location") and same_property("lateral_offset_m", "location")
+    assert same_property("lateral_offset_m", "lateral_offset_m")
+    assert not same_property("start_s_m", "lateral position")
+    assert not same_property("speed_delta_mps", "reactive (the driver brakes for what is ahead)")
+    assert not same_property(None, "speed")
+
+
+def test_every_documented_trigger_property_is_searched_but_two():
+    """Each catalog entry's documented trigger property names a physical variable of its
+    trigger entity, except A7's (the hitter's reactivity) and A11's (the truck's path angle),
+    which no physical variable varies: a simulated bench cannot find them."""
+    from rocas.catalog import entries
+    from rocas.pipeline.bench import same_property
+    from rocas.pipeline.physical import physical_space
+
+    unsearched = []
+    for stack in ("ads", "lav"):
+        for e in entries(stack):
+            t = e.truth
+            if not any(v.entity == t.trigger_entity
+                       and same_property(v.name.rsplit(".", 1)[-1], t.trigger_property)
+                       for v in physical_space(e.scenario).variables):
+                unsearched.append(e.id)
+    assert unsearched == ["A7", "A11"]
