@@ -16,8 +16,8 @@ from rocas.search import Mutation  # noqa: E402
 from rocas.stacks.highway.__main__ import main as highway_main  # noqa: E402
 from rocas.stacks.highway.accidents import entry  # noqa: E402
 from rocas.stacks.highway.comutation import Analysis, apply_physical  # noqa: E402
-from rocas.stacks.highway.view import write_analysis_rrd  # noqa: E402
 from rocas.stacks.highway.substitution import second_opinion  # noqa: E402
+from rocas.stacks.highway.view import write_analysis_rrd  # noqa: E402
 from rocas.stacks.highway.world import simulate  # noqa: E402
 
 from .scenes import PLANTED, WEAK_BRAKES  # noqa: E402
