@@ -5,10 +5,16 @@ MetaDrive scenarios. Here: draw random highway-env scenes from three families
 (``rocas.stacks.highway.draw``), set one driver parameter of the ego to a harmful value, keep
 the runs that crash and that restoring the parameter repairs, run rocas's co-mutation on each
 (``rocas.stacks.highway.comutation.analyze``) and count how often the fix it proposes moves
-the injected parameter back the right way, how often the diff names the injected parameter's
-module, and the time per accident.
+the injected parameter back the right way, how often the diff, module substitution and the
+answer name the injected parameter's module, the confidence, and the time per accident.
+
+rocas undoes each departure from the driver's declared defaults, which makes CF-RCA's protocol
+(every other parameter at its default) easy; ``--departures 0.3`` tunes the rest of the
+configuration first (each other parameter leaves its default with probability 0.3), so the
+injected parameter is one departure among several.
 
     python tests/benchmarks/bench_cfrca.py --accidents 100 --minutes 30 --workers 2
+    python tests/benchmarks/bench_cfrca.py --accidents 100 --workers 2 --departures 0.3
 """
 
 from __future__ import annotations
