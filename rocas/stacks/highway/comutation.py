@@ -22,6 +22,7 @@ Budgets are counted in simulations; simulations run on ``rocas.search.executor``
 
 from __future__ import annotations
 
+import functools
 import math
 import tempfile
 import time
@@ -39,7 +40,7 @@ from rocas.search.objectives import ego_dissimilarity
 from rocas.stacks.highway.params import parameters
 from rocas.stacks.highway.scene import KINDS, Scene
 from rocas.stacks.highway.substitution import SubstitutionOpinion, SubstitutionRun, judge
-from rocas.stacks.highway.world import RunResult, simulate
+from rocas.stacks.highway.world import RunResult, avoids, simulate
 
 SimTask = tuple[Scene, tuple[tuple[str, float], ...], int]
 #: fixes with distinct parameter sets and directions shrunk before the smallest is chosen
@@ -51,16 +52,11 @@ ALTERNATE_REFERENCES = 2
 FIX_MARGIN_M = 0.5
 
 
-def run_task(task: SimTask) -> RunResult:
-    """One simulation (module level, so worker processes can run it)."""
+def run_task(task: SimTask, substitute: str | None = None) -> RunResult:
+    """One simulation (module level, so worker processes can run it), with ``substitute``'s
+    module replaced by its ideal counterpart (:func:`rocas.stacks.highway.world.build`)."""
     scene, params, seed = task
-    return simulate(scene, dict(params), seed)
-
-
-def run_substituted(task: SimTask) -> RunResult:
-    """One simulation with ideal control (:mod:`rocas.stacks.highway.ideal`)."""
-    scene, params, seed = task
-    return simulate(scene, dict(params), seed, substitute="control")
+    return simulate(scene, dict(params), seed, substitute=substitute)
 
 
 @dataclass(frozen=True)
@@ -234,7 +230,9 @@ class _Runner:
     def runs(self, tasks: Sequence[SimTask], substitute: str | None = None
              ) -> list[RunResult]:
         self.count += len(tasks)
-        return self.executor.map(run_substituted if substitute else run_task, list(tasks))
+        fn = run_task if substitute is None else functools.partial(run_task,
+                                                                   substitute=substitute)
+        return self.executor.map(fn, list(tasks))
 
 
 def _until(accident: RunResult) -> int:
@@ -427,21 +425,6 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
         ego_dissimilarity(accident.ego[:, :2], runs[id(m)].ego[:, :2], until),
         space.distance(m), m.names))
     return [{k: float(v) for k, v in m.values.items()} for m in ranked]
-
-
-def avoids(fixed: RunResult, unfixed: RunResult) -> bool:
-    """The fixed run avoids the unfixed run's accident: it has none, or another one (another
-    kind or partner) no earlier than the unfixed one's time; a different drive may meet a
-    different hazard later, which is not this accident (module substitution's rule,
-    :func:`rocas.stacks.highway.substitution.judge`)."""
-    if not fixed.accident:
-        return True
-
-    def kind(r: RunResult) -> tuple[bool, int]:
-        return (r.off_road, -1 if r.off_road else r.collided_with)
-
-    return kind(fixed) != kind(unfixed) and (fixed.accident_t_s or 0.0) >= (
-        unfixed.accident_t_s or 0.0)
 
 
 def claim(fix: Mapping[str, float], current: Mapping[str, float]) -> dict[str, float]:

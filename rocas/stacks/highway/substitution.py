@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from rocas.stacks.highway.scene import Scene
-from rocas.stacks.highway.world import RunResult, simulate
+from rocas.stacks.highway.world import RunResult, accident_kind, avoids, simulate
 
 Stance = Literal["agrees", "consistent", "disagrees", "undetermined"]
 
@@ -84,8 +84,9 @@ class SubstitutionRun:
 
     def same_accident(self, other: SubstitutionRun) -> bool:
         """Both runs have an accident of the same kind with the same partner (off the road,
-        or a collision with the same vehicle or with a road object), whenever it happens."""
-        return self.accident and other.accident and self.what() == other.what()
+        or a collision with the same vehicle or with a road object), whenever it happens
+        (:func:`rocas.stacks.highway.world.accident_kind`)."""
+        return self.accident and accident_kind(self) == accident_kind(other)
 
     def to_dict(self) -> dict[str, Any]:
         return {"substituted": list(self.substituted), "accident": self.accident,
@@ -189,8 +190,8 @@ def judge(baseline: SubstitutionRun, ideal: SubstitutionRun) -> SubstitutionOpin
         return SubstitutionOpinion(True, baseline, ideal, "control",
                                    "ideal control avoids the accident (perception is exact)",
                                    EXACT)
-    t_ideal, t_base = ideal.accident_t_s or 0.0, baseline.accident_t_s or 0.0  # both set
-    if t_ideal >= t_base:
+    t_ideal = ideal.accident_t_s or 0.0
+    if avoids(ideal, baseline):  # another accident, no earlier than this one
         return SubstitutionOpinion(
             True, baseline, ideal, "control",
             f"ideal control avoids the accident (perception is exact); its run meets another "

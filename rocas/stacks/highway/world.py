@@ -223,6 +223,25 @@ def simulate(scene: Scene, params: Mapping[str, float] | StackParams | None = No
                      np.array(steering, dtype=np.float64))
 
 
+def accident_kind(r: Any) -> tuple[bool, int] | None:
+    """What a run's accident was: (off the road, partner id: -1 none, 0 a road object), None
+    without one. ``r``: a :class:`RunResult` or anything with its accident fields."""
+    if not r.accident:
+        return None
+    return (bool(r.off_road), -1 if r.off_road else int(r.collided_with))
+
+
+def avoids(fixed: Any, unfixed: Any) -> bool:
+    """``fixed`` avoids ``unfixed``'s accident: it has none, or another one (another kind or
+    partner) no earlier than the unfixed one's time; a different drive may meet a different
+    hazard later, which is not this accident. Both are :class:`RunResult`-like (module
+    substitution's runs too), ``unfixed`` with an accident."""
+    if not fixed.accident:
+        return True
+    return accident_kind(fixed) != accident_kind(unfixed) and (
+        (fixed.accident_t_s or 0.0) >= (unfixed.accident_t_s or 0.0))
+
+
 def _ttc(ego: Any, frame: DecisionFrame, others: list[Any]) -> float:
     f = frame.front
     if f.vid < 1 or ego.speed <= f.speed_mps:

@@ -10,7 +10,6 @@ from rocas.stacks.highway.accidents import entry  # noqa: E402
 from rocas.stacks.highway.comutation import (  # noqa: E402
     analyze,
     apply_physical,
-    avoids,
     cyber_space,
     physical_space,
     quarter_points,
@@ -114,22 +113,3 @@ def test_an_overtuned_heading_gain_is_named_though_a_stiffer_lateral_gain_also_r
     result = analyze(scene, {name: value}, 0)
     assert set(result.fix) == {name} and result.fix[name] < value
     assert any(set(f) == {"control.KP_LATERAL"} for f in result.alternatives)
-
-
-def test_a_fix_avoids_the_accident_unless_the_same_one_or_an_earlier_other_one_happens():
-    from dataclasses import replace
-
-    from rocas.stacks.highway.world import simulate
-
-    e = entry("h01")
-    crash = simulate(e.scene, e.params, e.seed)
-    safe = simulate(e.scene, {}, e.seed)
-    assert crash.collided and crash.collided_with > 0 and not safe.accident
-    assert avoids(safe, crash) and not avoids(crash, crash)
-    t, other = crash.accident_t_s, crash.collided_with % 4 + 1
-    later_other = replace(crash, collided_with=other, collision_t_s=t + 1.0)
-    earlier_other = replace(crash, collided_with=other, collision_t_s=t - 1.0)
-    off_road_later = replace(crash, collided=False, collided_with=-1, collision_t_s=None,
-                             off_road=True, off_road_t_s=t + 0.5)
-    assert avoids(later_other, crash) and avoids(off_road_later, crash)
-    assert not avoids(earlier_other, crash)

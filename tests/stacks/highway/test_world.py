@@ -74,3 +74,23 @@ def test_every_environment_builds_and_repeats_bit_for_bit():
                                           "intersection-v0"}
     for scene in scenes:
         assert simulate(scene, {}, 1).digest() == simulate(scene, {}, 1).digest()
+
+
+def test_a_fix_avoids_the_accident_unless_the_same_one_or_an_earlier_other_one_happens():
+    from dataclasses import replace
+
+    from rocas.stacks.highway.accidents import entry
+    from rocas.stacks.highway.world import avoids
+
+    e = entry("h01")
+    crash = simulate(e.scene, e.params, e.seed)
+    safe = simulate(e.scene, {}, e.seed)
+    assert crash.collided and crash.collided_with > 0 and not safe.accident
+    assert avoids(safe, crash) and not avoids(crash, crash)
+    t, other = crash.accident_t_s, crash.collided_with % 4 + 1
+    later_other = replace(crash, collided_with=other, collision_t_s=t + 1.0)
+    earlier_other = replace(crash, collided_with=other, collision_t_s=t - 1.0)
+    off_road_later = replace(crash, collided=False, collided_with=-1, collision_t_s=None,
+                             off_road=True, off_road_t_s=t + 0.5)
+    assert avoids(later_other, crash) and avoids(off_road_later, crash)
+    assert not avoids(earlier_other, crash)
