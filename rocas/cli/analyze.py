@@ -259,17 +259,11 @@ def _run_own_analysis(own: Callable[..., Any], args: argparse.Namespace, env: En
     Raises:
         UsageError: an option only rocas's own pipeline reads was given.
     """
-    from rocas.errors import UsageError
+    from rocas.cli.inputs import refuse_options_not_taken
 
-    defaults = argparse.ArgumentParser()
-    add_arguments(defaults)
-    given = [k for k, v in vars(defaults.parse_args([args.source])).items()
-             if k not in _OWN_ANALYSIS_OPTIONS and getattr(args, k, v) != v]
-    if given:
-        raise UsageError(f"this recording's stack analyses in its own world, which does not take "
-                         f"--{given[0].replace('_', '-')}",
-                         "options it takes: --out, --seed, --workers, --executor, --json, "
-                         "--quiet, --rrd")
+    refuse_options_not_taken(args, add_arguments, [args.source], _OWN_ANALYSIS_OPTIONS,
+                             "this recording's stack analyses in its own world",
+                             unlisted=("source",))
     out = Path(args.out) if args.out else Path("runs") / safe_component(Path(args.source).stem)
     if args.out:
         check_parent_exists(out)

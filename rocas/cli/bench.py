@@ -119,17 +119,11 @@ def _run_own_bench(own: Any, args: argparse.Namespace, env: Env) -> int:
     Raises:
         UsageError: an option only rocas's own pipeline reads was given.
     """
-    from rocas.errors import UsageError
+    from rocas.cli.inputs import refuse_options_not_taken
 
-    defaults = argparse.ArgumentParser()
-    add_arguments(defaults)
-    given = [k for k, v in vars(defaults.parse_args([])).items()
-             if k not in _OWN_BENCH_OPTIONS and getattr(args, k, v) != v]
-    if given:
-        raise UsageError(f"stack {args.stack} benches in its own world, which does not take "
-                         f"--{given[0].replace('_', '-')}",
-                         "options it takes: --out, --seed, --seeds, --workers, --executor, "
-                         "--json")
+    refuse_options_not_taken(args, add_arguments, [], _OWN_BENCH_OPTIONS,
+                             f"stack {args.stack} benches in its own world",
+                             unlisted=("ids", "stack"))
     out = Path(args.out)
     res = own(args.ids, args.seeds or [args.seed], workers=args.workers, executor=args.executor,
               progress=lambda msg: print(msg, file=env.stderr, flush=True))
