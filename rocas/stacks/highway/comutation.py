@@ -312,13 +312,17 @@ def defaults() -> dict[str, float]:
     return {p.full_name: p.default for p in parameters()}
 
 
+def _departs(value: float, default: float) -> bool:
+    return not math.isclose(value, default, rel_tol=1e-9, abs_tol=1e-12)
+
+
 def restores(m: Mutation, current: Mapping[str, float]) -> bool:
     """Every parameter ``m`` changes departs from its declared default and moves back towards
     it (not past it): the fix undoes a departure rather than retuning a default."""
     home = defaults()
     for n, v in m.values.items():
         d, c = home[n], current.get(n, home[n])
-        if math.isclose(c, d, rel_tol=1e-9, abs_tol=1e-12) or not min(c, d) <= float(v) <= max(c, d):
+        if not _departs(c, d) or not min(c, d) <= float(v) <= max(c, d):
             return False
     return True
 
@@ -331,7 +335,7 @@ def restorations(space: MutationSpace, current: Mapping[str, float]) -> list[Mut
     out = []
     for var in space.variables:
         d, c = home[var.name], float(current.get(var.name, home[var.name]))
-        if not math.isclose(c, d, rel_tol=1e-9, abs_tol=1e-12) and var.low <= d <= var.high:
+        if _departs(c, d) and var.low <= d <= var.high:
             out.append(Mutation({var.name: d}))
     return out
 
@@ -351,9 +355,11 @@ def _shrink_candidates(found: Sequence[tuple[Mutation, tuple[float, ...]]],
     return [m for m, _ in ranked[:SHRINK_CANDIDATES]]
 
 
-def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int
-           ) -> list[dict[str, float]]:
-    """The shrunk fixes, smallest change first (empty when none avoids the accident)."""
+def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, seed: int,
+           undo: bool = True) -> list[dict[str, float]]:
+    """The shrunk fixes, smallest change first (empty when none avoids the accident);
+    ``undo``: try the undoing of each departure first (a search of the whole driver after a
+    module's search found nothing need not: its undoings were tried and none repaired)."""
     current = dict(accident.params)
     searched = cyber_space(module, current)
     # the driver's whole space measures and shrinks every fix: the counterfactual restorations
@@ -372,7 +378,7 @@ def _cyber(accident: RunResult, module: str, runner: _Runner, budget: Budget, se
 
     # the counterfactual of each departure from the defaults first (one run each): an
     # accident that a departure's undoing avoids is explained by that departure
-    back = restorations(space, current)
+    back = restorations(space, current) if undo else []
     found = [(m, objectives) for m, (objectives, constraint)
              in zip(back, evaluate(back), strict=True) if constraint <= 0]
     if searched.variables:
@@ -491,7 +497,7 @@ def analyze(scene: Scene, params: Mapping[str, float] | None = None, seed: int =
     fixes = _cyber(accident, searched, runner, budget, sseed)
     if searched != "driver" and not fixes:
         searched = "driver"
-        fixes = _cyber(accident, searched, runner, budget, sseed)
+        fixes = _cyber(accident, searched, runner, budget, sseed, undo=False)
     fix: dict[str, float] = {}
     secs["cyber"], sims["cyber"] = time.perf_counter() - t0, runner.count - before
     t0, before = time.perf_counter(), runner.count
