@@ -22,7 +22,6 @@ Budgets are counted in simulations; simulations run on ``rocas.search.executor``
 
 from __future__ import annotations
 
-import functools
 import math
 import tempfile
 import time
@@ -52,11 +51,13 @@ ALTERNATE_REFERENCES = 2
 FIX_MARGIN_M = 0.5
 
 
-def run_task(task: SimTask, substitute: str | None = None) -> RunResult:
-    """One simulation (module level, so worker processes can run it), with ``substitute``'s
-    module replaced by its ideal counterpart (:func:`rocas.stacks.highway.world.build`)."""
-    scene, params, seed = task
-    return simulate(scene, dict(params), seed, substitute=substitute)
+def run_task(task: SimTask | tuple[Scene, tuple[tuple[str, float], ...], int, str]
+             ) -> RunResult:
+    """One simulation (module level, so worker processes and Ray can run it); a fourth item
+    names the module replaced by its ideal counterpart
+    (:func:`rocas.stacks.highway.world.build`)."""
+    scene, params, seed, *substitute = task
+    return simulate(scene, dict(params), seed, substitute=substitute[0] if substitute else None)
 
 
 @dataclass(frozen=True)
@@ -230,9 +231,9 @@ class _Runner:
     def runs(self, tasks: Sequence[SimTask], substitute: str | None = None
              ) -> list[RunResult]:
         self.count += len(tasks)
-        fn = run_task if substitute is None else functools.partial(run_task,
-                                                                   substitute=substitute)
-        return self.executor.map(fn, list(tasks))
+        # the substitute rides in the task: an executor maps one module-level function
+        return self.executor.map(run_task, [t if substitute is None else (*t, substitute)
+                                            for t in tasks])
 
 
 def _until(accident: RunResult) -> int:

@@ -91,7 +91,9 @@ def test_the_answer_is_the_same_on_ray(tmp_path):
         done = _ray_child(tmp_path / f"ray-{attempt}")
         if done.returncode == 0:
             break
-        assert not done.stderr.startswith("rocas: error"), done.stderr
+        # rocas's own error (after its progress lines) is a failure, not Ray dying
+        assert not any(line.startswith("rocas: error")
+                       for line in done.stderr.splitlines()), done.stderr
         deaths.append(done.stderr.strip().splitlines()[-5:])
     else:
         pytest.skip(f"Ray's local cluster ended the child twice on this machine: {deaths[-1]}")
